@@ -1,0 +1,85 @@
+"""Linear (small-deflection) cantilever under a tip wrench.
+
+Derivation. Clamp at the origin, tangent e1, bending rigidity EI, free length L; force f
+and moment tau at the tip s = L. The internal moment at s (small deflection) is
+    M(s) = tau + (L - s) e1 x f,
+curvature kappa = M / EI (bending components, perpendicular to e1), tip-frame rotation
+phi(s) = int_0^s kappa and tangent t = e1 + phi x e1. Integrating twice:
+    phi(L)   = L / EI tau_perp + L^2 / (2 EI) e1 x f,
+    delta(L) = L^2 / (2 EI) tau x e1 + L^3 / (3 EI) f_perp.
+So a tip force deflects the tip by F L^3 / (3 EI) and turns it by F L^2 / (2 EI); a tip
+moment by T L^2 / (2 EI) and T L / EI (Gere & Timoshenko, Mechanics of Materials, table of
+cantilever deflections).
+
+Corrections to the paper (shared/seed, Sec. II-B): eq. 6a writes the force term of the
+tip position as L/6 (e1 x f) x e1, i.e. F L^3 / (6 EI): the integral of (L s - s^2 / 2)
+over [0, L] is L^3 / 3, so the factor is 1/3. Its grouped form eq. 8 writes one factor
+L^2 / (2 EI) in front of (f, tau) for the position and L / EI for the tangent, which
+drops a length on the force columns (they are not even dimensionally consistent with the
+moment columns): the correct blocks are (L^3 / 3EI, L^2 / 2EI) for the position and
+(L^2 / 2EI, L / EI) for the tangent, as above.
+
+Generalised coordinates q = (delta_y, delta_z, phi_y, phi_z): tip displacement across the
+base axis and the tip-frame rotation vector (no twist: the frame is carried by bending
+alone). Their conjugate loads are (f_y, f_z, tau_y, tau_z); the compliance between them
+is symmetric positive definite. SI units are used for all inputs and outputs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+
+from design.frames import rotation_from_vector
+
+
+def tip_pose(coordinates: ca.SX, free_length: Any) -> tuple[ca.SX, ca.SX]:
+    """Tip position and frame of the linear rod.
+
+    coordinates : q = (delta_y, delta_z, phi_y, phi_z). [m, m, rad, rad]
+    free_length : L. [m]
+    Returns (position (3,) base frame [m], frame (3, 3) columns (tangent, y_tip, z_tip)).
+    The tip stays at x = L (axial shortening is second order and dropped by the linear
+    theory); the frame is exp([phi]^) with phi = (0, phi_y, phi_z), which is orthonormal
+    and equals I + [phi]^ to the theory's order.
+    """
+    position = ca.vertcat(free_length, coordinates[0], coordinates[1])
+    frame = rotation_from_vector(ca.vertcat(0, coordinates[2], coordinates[3]))
+    return position, frame
+
+
+def bending_load(force: ca.SX, torque: ca.SX, tangent: ca.SX) -> ca.SX:
+    """Loads conjugate to q: (f_y, f_z, tau_y, tau_z), with the torque's component along the
+    tip tangent removed: that part twists the transmissions (which hold it) and does not
+    bend the rod. [N, N, N m, N m]
+    """
+    bending_torque = torque - ca.dot(torque, tangent) * tangent
+    return ca.vertcat(force[1], force[2], bending_torque[1], bending_torque[2])
+
+
+def compliance(free_length: Any, bending_rigidity: Any) -> ca.SX:
+    """Compliance C with q = C (f_y, f_z, tau_y, tau_z), shape (4, 4). [m/N, m/(N m), 1/(N m)]"""
+    a = free_length**3 / (3 * bending_rigidity)
+    b = free_length**2 / (2 * bending_rigidity)
+    c = free_length / bending_rigidity
+    return ca.vertcat(
+        ca.horzcat(a, 0, 0, b),
+        ca.horzcat(0, a, -b, 0),
+        ca.horzcat(0, -b, c, 0),
+        ca.horzcat(b, 0, 0, c),
+    )
+
+
+def stiffness(free_length: Any, bending_rigidity: Any) -> ca.SX:
+    """Stiffness K = C^-1, closed form (each bending plane is a 2 x 2 block). [N/m, N, N m]"""
+    ei, length = bending_rigidity, free_length
+    k_ff = 12 * ei / length**3
+    k_fm = 6 * ei / length**2
+    k_mm = 4 * ei / length
+    return ca.vertcat(
+        ca.horzcat(k_ff, 0, 0, -k_fm),
+        ca.horzcat(0, k_ff, k_fm, 0),
+        ca.horzcat(0, k_fm, k_mm, 0),
+        ca.horzcat(-k_fm, 0, 0, k_mm),
+    )

@@ -1,0 +1,357 @@
+"""Design files (TOML, spec/formats.md): load, validate, save.
+
+Files speak millimetres, megapascals, tesla and kg/m^3 as their key names say; the
+returned :class:`~design.params.Design` is in SI. Every bad value raises
+:class:`DesignError` whose message names the key, what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+
+from design.atomic import write_text
+from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
+
+MM = 1e-3
+MPA = 1e6
+
+
+class DesignError(ValueError):
+    """A design file that cannot describe a robot. The message is meant for the user."""
+
+
+@dataclass(frozen=True)
+class Key:
+    """One numeric key of a design file.
+
+    scale : factor from the file's unit to SI.
+    low, high : admissible range in file units; ``None`` is unbounded.
+    low_open : whether ``low`` itself is excluded.
+    """
+
+    name: str
+    meaning: str
+    scale: float = 1.0
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    vector: bool = False
+
+    def expected(self) -> str:
+        if self.vector:
+            return "an array of three finite numbers"
+        lo = (
+            "" if self.low is None else (f"> {self.low:g}" if self.low_open else f">= {self.low:g}")
+        )
+        hi = "" if self.high is None else f"<= {self.high:g}"
+        rng = " and ".join(x for x in (lo, hi) if x)
+        return f"a number {rng}".rstrip()
+
+
+def _tube_keys() -> tuple[Key, ...]:
+    return (
+        Key("outer_diameter_mm", "outer diameter [mm]", MM, 0.0, None, True),
+        Key("inner_diameter_mm", "inner diameter [mm], 0 for solid", MM, 0.0),
+        Key("youngs_modulus_mpa", "Young's modulus [MPa]", MPA, 0.0, None, True),
+        Key("poisson_ratio", "Poisson's ratio [-]", 1.0, -1.0, 0.5, True),
+        Key("density_kg_m3", "density [kg/m^3]", 1.0, 0.0, None, True),
+    )
+
+
+SECTIONS: dict[str, tuple[Key, ...]] = {
+    "robot": (Key("free_length_mm", "free length [mm]", MM, 0.0, None, True),),
+    "robot.catheter": _tube_keys(),
+    "robot.wire": _tube_keys(),
+    "tip": (
+        Key("magnet_outer_diameter_mm", "ring outer diameter [mm]", MM, 0.0, None, True),
+        Key("magnet_inner_diameter_mm", "ring inner diameter [mm]", MM, 0.0),
+        Key("magnet_length_mm", "ring length [mm]", MM, 0.0, None, True),
+        Key("remanence_t", "ring remanence [T]", 1.0, 0.0, 1.6),
+        Key("gap_mm", "face-to-face gap [mm]", MM, 0.0),
+        Key("density_kg_m3", "ring density [kg/m^3]", 1.0, 0.0, None, True),
+    ),
+    "external_magnet": (
+        Key("diameter_mm", "cylinder diameter [mm]", MM, 0.0, None, True),
+        Key("length_mm", "cylinder length [mm]", MM, 0.0, None, True),
+        Key("remanence_t", "remanence [T]", 1.0, 0.0, 1.6),
+        Key("center_mm", "centre, base frame [mm]", MM, vector=True),
+        Key("magnetization", "unit magnetisation direction, base frame", 1.0, vector=True),
+    ),
+    "environment": (Key("gravity_m_s2", "gravity, base frame [m/s^2]", 1.0, vector=True),),
+}
+OPTIONAL_SECTIONS = {"environment"}
+OPTIONAL_KEYS = {"environment.gravity_m_s2"}
+TOP_KEYS = {"name", "description", "robot", "tip", "external_magnet", "environment"}
+EXTERNAL_SHAPES = ("cylinder",)
+UNIT_TOLERANCE = 1e-3
+
+
+def _suggest(name: str, candidates: set[str] | list[str]) -> str:
+    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+def _number(path: str, value: Any, key: Key) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+    too_low = key.low is not None and (x <= key.low if key.low_open else x < key.low)
+    too_high = key.high is not None and x > key.high
+    if too_low or too_high:
+        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+    return x
+
+
+def _vector(path: str, value: Any, key: Key) -> tuple[float, float, float]:
+    ok = isinstance(value, list) and len(value) == 3
+    ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    ok = ok and all(math.isfinite(float(v)) for v in value)
+    if not ok:
+        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+    return (float(value[0]), float(value[1]), float(value[2]))
+
+
+def _section(doc: dict[str, Any], name: str) -> dict[str, float | tuple[float, float, float]]:
+    """Read one section's numeric keys into SI values, checking names, types and ranges."""
+    node: Any = doc
+    for part in name.split("."):
+        node = node.get(part) if isinstance(node, dict) else None
+    if node is None:
+        raise DesignError(f"missing section [{name}]")
+    if not isinstance(node, dict):
+        raise DesignError(f"[{name}] must be a table of keys; got {node!r}")
+    keys = {k.name: k for k in SECTIONS[name]}
+    subsections = {s.split(".")[-1] for s in SECTIONS if s.startswith(name + ".")}
+    extra = {"shape"} if name == "external_magnet" else set()
+    for given in node:
+        if given not in keys and given not in subsections and given not in extra:
+            allowed = set(keys) | subsections | extra
+            raise DesignError(f"unknown key {name}.{given}{_suggest(given, allowed)}")
+    out: dict[str, float | tuple[float, float, float]] = {}
+    for key in keys.values():
+        path = f"{name}.{key.name}"
+        if key.name not in node:
+            if path in OPTIONAL_KEYS:
+                continue
+            raise DesignError(f"missing key {path} ({key.meaning}); expected {key.expected()}")
+        raw = node[key.name]
+        if key.vector:
+            v = _vector(path, raw, key)
+            out[key.name] = (v[0] * key.scale, v[1] * key.scale, v[2] * key.scale)
+        else:
+            out[key.name] = _number(path, raw, key) * key.scale
+    return out
+
+
+def _tube(doc: dict[str, Any], name: str) -> Tube:
+    s = _section(doc, name)
+    od, idia = s["outer_diameter_mm"], s["inner_diameter_mm"]
+    if idia >= od:  # type: ignore[operator]
+        raise DesignError(
+            f"{name}.inner_diameter_mm must be smaller than outer_diameter_mm "
+            f"({od / MM:g}); got {idia / MM:g}"  # type: ignore[operator]
+        )
+    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"])  # type: ignore[arg-type]
+
+
+def design_from_dict(doc: dict[str, Any]) -> Design:
+    """Build a validated :class:`Design` (SI) from a parsed design-file document."""
+    for given in doc:
+        if given not in TOP_KEYS:
+            raise DesignError(f"unknown key {given}{_suggest(given, TOP_KEYS)}")
+    name = doc.get("name")
+    if not isinstance(name, str) or not name.strip():
+        raise DesignError(f"name must be a non-empty string; got {name!r}")
+    description = doc.get("description", "")
+    if not isinstance(description, str):
+        raise DesignError(f"description must be a string; got {description!r}")
+
+    robot_s = _section(doc, "robot")
+    catheter = _tube(doc, "robot.catheter")
+    wire = _tube(doc, "robot.wire")
+    if wire.outer_diameter >= catheter.inner_diameter:
+        raise DesignError(
+            "robot.wire.outer_diameter_mm must be smaller than robot.catheter.inner_diameter_mm "
+            f"({catheter.inner_diameter / MM:g}) so the wire fits inside the catheter; "
+            f"got {wire.outer_diameter / MM:g}"
+        )
+    robot = Robot(robot_s["free_length_mm"], catheter, wire)  # type: ignore[arg-type]
+
+    t = _section(doc, "tip")
+    tip = Tip(
+        t["magnet_outer_diameter_mm"],
+        t["magnet_inner_diameter_mm"],  # type: ignore[arg-type]
+        t["magnet_length_mm"],
+        t["remanence_t"],
+        t["gap_mm"],
+        t["density_kg_m3"],  # type: ignore[arg-type]
+    )
+    if tip.magnet_inner_diameter >= tip.magnet_outer_diameter:
+        raise DesignError(
+            "tip.magnet_inner_diameter_mm must be smaller than magnet_outer_diameter_mm "
+            f"({tip.magnet_outer_diameter / MM:g}); got {tip.magnet_inner_diameter / MM:g}"
+        )
+    if tip.magnet_inner_diameter < wire.outer_diameter:
+        raise DesignError(
+            "tip.magnet_inner_diameter_mm must be at least robot.wire.outer_diameter_mm "
+            f"({wire.outer_diameter / MM:g}) so the ring fits on the wire; "
+            f"got {tip.magnet_inner_diameter / MM:g}"
+        )
+
+    e = _section(doc, "external_magnet")
+    shape = doc["external_magnet"].get("shape")
+    if shape not in EXTERNAL_SHAPES:
+        raise DesignError(
+            f"external_magnet.shape must be one of {', '.join(map(repr, EXTERNAL_SHAPES))}; "
+            f"got {shape!r}"
+        )
+    mag = e["magnetization"]
+    norm = math.sqrt(sum(c * c for c in mag))  # type: ignore[union-attr]
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise DesignError(
+            "external_magnet.magnetization must be a unit vector (length 1 within "
+            f"{UNIT_TOLERANCE:g}); got {list(mag)} of length {norm:.6g}"  # type: ignore[arg-type]
+        )
+    mag = tuple(c / norm for c in mag)  # type: ignore[union-attr]
+    ext = ExternalMagnet(
+        shape,
+        e["diameter_mm"],
+        e["length_mm"],
+        e["remanence_t"],  # type: ignore[arg-type]
+        e["center_mm"],
+        mag,  # type: ignore[arg-type]
+    )
+
+    environment = Environment()
+    if "environment" in doc:
+        env = _section(doc, "environment")
+        environment = Environment(gravity=env.get("gravity_m_s2"))  # type: ignore[arg-type]
+
+    design = Design(name, robot, tip, ext, environment, description)
+    _check_clearance(design)
+    return design
+
+
+def _check_clearance(design: Design) -> None:
+    """Reject an external magnet that overlaps the straight robot (base to distal ring)."""
+    ext = design.external_magnet
+    tip = design.tip
+    reach = design.robot.free_length + tip.spacing + tip.magnet_length / 2
+    axis = ext.magnetization
+    half, radius = ext.length / 2, ext.diameter / 2
+    n = 4001
+    for i in range(n):
+        x = reach * i / (n - 1)
+        # The tip rings are the thickest part; the body is the catheter.
+        near_tip = x >= design.robot.free_length - tip.magnet_length / 2
+        r_body = (
+            tip.magnet_outer_diameter if near_tip else design.robot.catheter.outer_diameter
+        ) / 2
+        d = (x - ext.center[0], -ext.center[1], -ext.center[2])
+        a = sum(di * ai for di, ai in zip(d, axis, strict=True))
+        radial = math.sqrt(max(sum(di * di for di in d) - a * a, 0.0))
+        gap = math.hypot(max(abs(a) - half, 0.0), max(radial - radius, 0.0))
+        if gap < r_body:
+            raise DesignError(
+                "external_magnet.center_mm places the magnet on the straight robot: the "
+                f"cylinder must clear the robot (base to distal ring, radius {r_body / MM:g} mm); "
+                f"got an overlap at x = {x / MM:.2f} mm in the base frame"
+            )
+
+
+def load_design(path: str | os.PathLike[str]) -> Design:
+    """Read and validate a design file. Raises :class:`DesignError` on any problem."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DesignError(f"design file {p} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DesignError(f"design file {p} cannot be read: {exc}") from None
+    return loads_design(text, source=str(p))
+
+
+def loads_design(text: str, source: str = "<string>") -> Design:
+    """Parse and validate design-file text."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError(f"{source} is not valid TOML: {exc}") from None
+    try:
+        return design_from_dict(doc)
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from None
+
+
+def default_design() -> Design:
+    """The paper's demonstrator, shipped with the package."""
+    text = resources.files("design").joinpath("data/demonstrator.toml").read_text("utf-8")
+    return loads_design(text, source="demonstrator (embedded)")
+
+
+def _file_units(x: float, scale: float) -> float:
+    """SI value in file units, rounded to 12 significant digits so 1.8 mm stays 1.8."""
+    return float(f"{x / scale:.12g}")
+
+
+def design_to_dict(design: Design) -> dict[str, Any]:
+    """The design-file document (file units) of a :class:`Design`."""
+
+    def tube(t: Tube) -> dict[str, float]:
+        return {
+            "outer_diameter_mm": _file_units(t.outer_diameter, MM),
+            "inner_diameter_mm": _file_units(t.inner_diameter, MM),
+            "youngs_modulus_mpa": _file_units(t.youngs_modulus, MPA),
+            "poisson_ratio": t.poisson_ratio,
+            "density_kg_m3": t.density,
+        }
+
+    tip, ext = design.tip, design.external_magnet
+    doc: dict[str, Any] = {"name": design.name}
+    if design.description:
+        doc["description"] = design.description
+    doc["robot"] = {
+        "free_length_mm": _file_units(design.robot.free_length, MM),
+        "catheter": tube(design.robot.catheter),
+        "wire": tube(design.robot.wire),
+    }
+    doc["tip"] = {
+        "magnet_outer_diameter_mm": _file_units(tip.magnet_outer_diameter, MM),
+        "magnet_inner_diameter_mm": _file_units(tip.magnet_inner_diameter, MM),
+        "magnet_length_mm": _file_units(tip.magnet_length, MM),
+        "remanence_t": tip.remanence,
+        "gap_mm": _file_units(tip.gap, MM),
+        "density_kg_m3": tip.density,
+    }
+    doc["external_magnet"] = {
+        "shape": ext.shape,
+        "diameter_mm": _file_units(ext.diameter, MM),
+        "length_mm": _file_units(ext.length, MM),
+        "remanence_t": ext.remanence,
+        "center_mm": [_file_units(c, MM) for c in ext.center],
+        "magnetization": list(ext.magnetization),
+    }
+    if design.environment.gravity is not None:
+        doc["environment"] = {"gravity_m_s2": list(design.environment.gravity)}
+    return doc
+
+
+def dumps_design(design: Design) -> str:
+    """Design-file text of a :class:`Design`."""
+    return tomli_w.dumps(design_to_dict(design))
+
+
+def save_design(design: Design, path: str | os.PathLike[str]) -> None:
+    """Write a design file atomically."""
+    write_text(path, dumps_design(design))
