@@ -1,7 +1,5 @@
 """Physical constants, SI."""
 
-import math
-
-MU0 = 4e-7 * math.pi
-"""Vacuum permeability (the pre-2019 exact value; the CODATA 2018 value differs by 5e-10
-relative, far below anything modelled here). [T m / A]"""
+MU0 = 1.25663706127e-6
+"""Vacuum permeability, CODATA 2022 (the value scipy and so magpylib use, so the oracle tests compare
+like with like). [T m / A]"""

@@ -1,0 +1,296 @@
+"""The ``ringpair`` command line.
+
+Exit codes: 0 done; 2 bad input (one message naming the key or option, no traceback);
+1 an unexpected failure.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from design.atomic import write_text
+from design.designfile import DesignError, default_design, load_design, save_design
+from design.equilibrium import solve_design
+from design.magnets import cylinder_moment, ring_moment
+from design.params import Design
+from design.sections import bending_rigidity, tube_torsional_rigidity
+from design.workspace import Workspace, sweep_workspace
+from ringpair.angles import parse_angles
+from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
+
+console = Console()
+err_console = Console(stderr=True)
+
+DESIGN_HELP = "Design file (TOML, spec/formats.md). Default: the paper's demonstrator."
+
+
+class UserError(click.ClickException):
+    """Bad input: printed as one message, exit code 2."""
+
+    exit_code = 2
+
+    def show(self, file: object = None) -> None:
+        err_console.print(f"[bold red]error:[/] {self.message}", highlight=False)
+
+
+def _design(path: Path | None) -> Design:
+    if path is None:
+        return default_design()
+    try:
+        return load_design(path)
+    except DesignError as exc:
+        raise UserError(str(exc)) from None
+
+
+def _angles(text: str, option: str) -> np.ndarray:
+    try:
+        return parse_angles(text, option)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="ringpair")
+def cli() -> None:
+    """ringpair: design magnetic continuum robots steered by a rotational ring pair.
+
+    Two diametrically magnetised rings at the tip, each turned by its own coaxial element
+    (inner wire: distal ring, theta1; outer catheter: proximal ring, theta2), steer the tip
+    in the fixed field of an external magnet. Every command takes a design file
+    (spec/formats.md) and defaults to the paper's demonstrator. Angles are in degrees,
+    lengths in millimetres; base frame: origin at the clamp, x along the straight robot.
+    """
+
+
+@cli.command()
+@click.argument("design", required=False, type=click.Path(path_type=Path))
+@click.option(
+    "--save",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Also write the (validated) design to this TOML file, e.g. to start a new one.",
+)
+def show(design: Path | None, save: Path | None) -> None:
+    """Validate DESIGN and print it with its derived quantities."""
+    d = _design(design)
+    t, r, e = d.tip, d.robot, d.external_magnet
+    table = Table(title=f"design '{d.name}'", show_header=True)
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    m_ring = ring_moment(
+        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.remanence
+    )
+    rows = [
+        ("free length", f"{r.free_length * 1e3:g} mm"),
+        ("bending rigidity EI (catheter + wire)", f"{bending_rigidity(r):.4g} N m^2"),
+        ("torsional rigidity GJ catheter", f"{tube_torsional_rigidity(r.catheter):.4g} N m^2"),
+        ("torsional rigidity GJ wire", f"{tube_torsional_rigidity(r.wire):.4g} N m^2"),
+        ("ring moment (each)", f"{m_ring:.4g} A m^2"),
+        ("ring centre spacing", f"{t.spacing * 1e3:g} mm"),
+        (
+            "external magnet moment",
+            f"{cylinder_moment(e.diameter, e.length, e.remanence):.4g} A m^2",
+        ),
+        ("external magnet centre", "[" + ", ".join(f"{c * 1e3:g}" for c in e.center) + "] mm"),
+    ]
+    for k, v in rows:
+        table.add_row(k, v)
+    console.print(table)
+    if save is not None:
+        save_design(d, save)
+        console.print(f"wrote {save}")
+
+
+@cli.command()
+@click.argument("design", required=False, type=click.Path(path_type=Path))
+@click.option(
+    "--theta1",
+    default="0:180:12",
+    show_default=True,
+    help="Distal ring (wire) angles [deg]: START:STOP:STEP, a comma list or one value.",
+)
+@click.option(
+    "--theta2",
+    default="0",
+    show_default=True,
+    help="Proximal ring (catheter) angles [deg], same forms. Every pair of the two "
+    "lists is simulated.",
+)
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="CSV to write. Default: outputs/<design name>/simulate.csv.",
+)
+@click.option("--quiet", is_flag=True, help="Do not print the table.")
+def simulate(design: Path | None, theta1: str, theta2: str, out: Path | None, quiet: bool) -> None:
+    """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
+
+    CSV columns: theta1_deg, theta2_deg, x_mm, y_mm, z_mm (tip, base frame), the tip
+    tangent, deflection_mm (from the straight tip), converged, stable. Configurations
+    whose equilibrium did not converge have empty pose cells and converged = false.
+    """
+    d = _design(design)
+    t1 = _angles(theta1, "--theta1")
+    t2 = _angles(theta2, "--theta2")
+    g1, g2 = np.meshgrid(t1, t2, indexing="ij")
+    commanded = np.column_stack([g1.ravel(), g2.ravel()])
+    with console.status("solving equilibria (the first run on a machine compiles the model)"):
+        eq = solve_design(d, np.deg2rad(commanded[:, 0]), np.deg2rad(commanded[:, 1]))
+    rest = np.array([d.robot.free_length, 0.0, 0.0])
+    rows = pose_rows(eq, commanded, rest)
+    out = out or Path("outputs") / d.name / "simulate.csv"
+    write_csv(
+        out, rows, POSE_COLUMNS, header=f"ringpair simulate, design '{d.name}', baseline model"
+    )
+    if not quiet:
+        table = Table(title=f"{d.name}: tip poses (baseline model)")
+        for col in (
+            "theta1 [deg]",
+            "theta2 [deg]",
+            "x [mm]",
+            "y [mm]",
+            "z [mm]",
+            "deflection (mm)",
+            "state",
+        ):
+            table.add_column(col, justify="right")
+        shown = rows if len(rows) <= 60 else rows[:30] + rows[-30:]
+        for row in shown:
+            state = (
+                ("stable" if row["stable"] else "UNSTABLE") if row["converged"] else "NOT CONVERGED"
+            )
+            table.add_row(
+                *(
+                    f"{row[k]:.2f}"
+                    for k in ("theta1_deg", "theta2_deg", "x_mm", "y_mm", "z_mm", "deflection_mm")
+                ),
+                state,
+            )
+        console.print(table)
+        if len(rows) > 60:
+            console.print(f"({len(rows) - 60} rows not shown)")
+    n_bad = int(np.count_nonzero(~eq.converged))
+    if n_bad:
+        err_console.print(f"[yellow]warning:[/] {n_bad} configuration(s) did not converge")
+    console.print(f"wrote {out} ({len(rows)} configurations)")
+
+
+@cli.command()
+@click.argument("design", required=False, type=click.Path(path_type=Path))
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Directory for workspace.csv, summary.json and the PNG plots. "
+    "Default: outputs/<design name>/workspace.",
+)
+@click.option(
+    "--step",
+    type=click.FloatRange(0.1, 90.0),
+    default=5.0,
+    show_default=True,
+    help="Grid spacing of theta1 and theta2 over a full turn [deg].",
+)
+def workspace(design: Path | None, out: Path | None, step: float) -> None:
+    """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
+
+    Prints the deflection range along y and z, the largest deflection and its direction,
+    the radius of the largest disc around the rest position inside the reachable set
+    (size and symmetry in one number) and the neutral (antiparallel) deflection; writes
+    workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z) and
+    deflection.png (deflection against theta1 with theta2 = 0).
+    """
+    d = _design(design)
+    out = out or Path("outputs") / d.name / "workspace"
+    from ringpair.plots import write_workspace_plots  # matplotlib only when plotting
+
+    with console.status("sweeping the workspace"):
+        ws = sweep_workspace(d, np.deg2rad(step))
+        sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
+        sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0)
+    rest = ws.rest_position
+    commanded = np.rad2deg(ws.grid.theta)
+    write_csv(
+        out / "workspace.csv",
+        pose_rows(ws.grid, commanded, rest),
+        POSE_COLUMNS,
+        header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg",
+    )
+    summary = workspace_summary(ws, d, step)
+    write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    pictures = write_workspace_plots(ws, sweep, d, out)
+    _print_summary(summary)
+    console.print(
+        f"wrote {out}/: workspace.csv, summary.json, " + ", ".join(p.name for p in pictures)
+    )
+
+
+def workspace_summary(ws: Workspace, design: Design, step_deg: float) -> dict:
+    """The workspace metrics in file units (mm, deg)."""
+    direction = ws.max_direction
+    return {
+        "design": design.name,
+        "model": "baseline",
+        "grid_step_deg": step_deg,
+        "configurations": len(ws.grid),
+        "unconverged": ws.n_unconverged,
+        "unstable": ws.n_unstable,
+        "free_length_mm": design.robot.free_length * 1e3,
+        "y_range_mm": [v * 1e3 for v in ws.y_range],
+        "z_range_mm": [v * 1e3 for v in ws.z_range],
+        "max_deflection_mm": ws.max_deflection * 1e3,
+        "max_deflection_percent_of_length": 100 * ws.max_deflection / design.robot.free_length,
+        "max_deflection_direction": [float(c) for c in direction],
+        "max_deflection_direction_deg": float(np.rad2deg(np.arctan2(direction[2], direction[1]))),
+        "max_deflection_theta_deg": [float(np.rad2deg(a)) for a in ws.max_angles],
+        "disc_radius_mm": ws.disc_radius * 1e3,
+        "neutral_deflection_mm": ws.neutral_deflection * 1e3,
+        "boundary_excess_mm": ws.boundary_excess * 1e3,
+    }
+
+
+def _print_summary(s: dict) -> None:
+    table = Table(title=f"workspace of '{s['design']}' ({s['model']} model)")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    table.add_row(
+        "configurations (unconverged / unstable)",
+        f"{s['configurations']} ({s['unconverged']} / {s['unstable']})",
+    )
+    table.add_row("deflection range along y", "{:.2f} .. {:.2f} mm".format(*s["y_range_mm"]))
+    table.add_row("deflection range along z", "{:.2f} .. {:.2f} mm".format(*s["z_range_mm"]))
+    table.add_row(
+        "largest deflection",
+        f"{s['max_deflection_mm']:.2f} mm "
+        f"({s['max_deflection_percent_of_length']:.1f} % of the length)",
+    )
+    table.add_row(
+        "  its direction (from +y towards +z)", f"{s['max_deflection_direction_deg']:.1f} deg"
+    )
+    table.add_row(
+        "  at theta1, theta2", "{:.1f}, {:.1f} deg".format(*s["max_deflection_theta_deg"])
+    )
+    table.add_row("largest disc around rest (radius)", f"{s['disc_radius_mm']:.2f} mm")
+    table.add_row("neutral (antiparallel) deflection", f"{s['neutral_deflection_mm']:.3f} mm")
+    console.print(table)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    try:
+        cli.main(standalone_mode=True)
+    except KeyboardInterrupt:
+        err_console.print("interrupted")
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

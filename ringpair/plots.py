@@ -1,0 +1,151 @@
+"""Workspace pictures (matplotlib, written atomically as PNG). Millimetres and degrees."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Rectangle  # noqa: E402
+
+from design.atomic import atomic_path  # noqa: E402
+from design.equilibrium import Equilibria  # noqa: E402
+from design.params import Design  # noqa: E402
+from design.workspace import Workspace  # noqa: E402
+
+MM = 1e3
+REACH = "#1f77b4"
+LOOP = "#d62728"
+NEUTRAL = "#2ca02c"
+
+
+def _save(fig: plt.Figure, path: Path) -> None:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+
+
+def _magnet_outline(ax: plt.Axes, design: Design, axes: tuple[int, int]) -> None:
+    """Outline of the external cylinder projected on a base-frame plane (axis along x/y/z)."""
+    ext = design.external_magnet
+    axis = np.abs(np.asarray(ext.magnetization))
+    half = np.where(axis > 0.5, ext.length / 2, ext.diameter / 2)
+    c = np.asarray(ext.center)
+    i, j = axes
+    ax.add_patch(
+        Rectangle(
+            ((c[i] - half[i]) * MM, (c[j] - half[j]) * MM),
+            2 * half[i] * MM,
+            2 * half[j] * MM,
+            facecolor="#bbbbbb",
+            edgecolor="#555555",
+            label="external magnet",
+        )
+    )
+
+
+def plot_projection(
+    ws: Workspace, design: Design, path: Path, axes: tuple[int, int], title: str
+) -> None:
+    """Reachable tip positions and the set-up seen on one base-frame plane."""
+    names = "xyz"
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    pts = ws.reachable * MM
+    i, j = axes
+    ax.plot(
+        [0, design.robot.free_length * MM], [0, 0], color="#444444", lw=2, label="straight robot"
+    )
+    ax.scatter(pts[:, i], pts[:, j], s=3, color=REACH, label="reachable tips")
+    _magnet_outline(ax, design, axes)
+    ax.plot(ws.rest_position[i] * MM, ws.rest_position[j] * MM, "k+", ms=12, label="rest")
+    ax.set_xlabel(f"{names[i]} [mm]")
+    ax.set_ylabel(f"{names[j]} [mm]")
+    ax.set_aspect("equal")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", fontsize=8)
+    _save(fig, path)
+
+
+def plot_section(ws: Workspace, path: Path) -> None:
+    """The workspace looking along the base x axis: reachable set, loops, disc, maximum."""
+    fig, ax = plt.subplots(figsize=(6, 6))
+    pts = (ws.reachable - ws.rest_position) * MM
+    ax.scatter(pts[:, 1], pts[:, 2], s=3, color=REACH, alpha=0.5, label="reachable tips")
+    for eq, color, label in (
+        (ws.parallel, LOOP, "parallel rings (boundary)"),
+        (ws.antiparallel, NEUTRAL, "antiparallel rings (neutral)"),
+    ):
+        loop = (eq.position[eq.converged] - ws.rest_position) * MM
+        ax.plot(
+            np.append(loop[:, 1], loop[:1, 1]),
+            np.append(loop[:, 2], loop[:1, 2]),
+            color=color,
+            lw=1.5,
+            label=label,
+        )
+    ax.add_patch(
+        Circle(
+            (0, 0),
+            ws.disc_radius * MM,
+            fill=False,
+            ls="--",
+            color="k",
+            label=f"largest disc, r = {ws.disc_radius * MM:.2f} mm",
+        )
+    )
+    tip = ws.max_direction * ws.max_deflection * MM
+    ax.annotate(
+        "", xy=(tip[1], tip[2]), xytext=(0, 0), arrowprops={"arrowstyle": "->", "color": "k"}
+    )
+    ax.text(tip[1], tip[2], f" max {ws.max_deflection * MM:.2f} mm", fontsize=8)
+    ax.set_xlabel("y deflection [mm]")
+    ax.set_ylabel("z deflection [mm]")
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.set_title("Workspace seen along the base x axis")
+    ax.legend(loc="lower left", fontsize=8)
+    _save(fig, path)
+
+
+def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
+    """Deflection against ring angle: theta1 swept with theta2 = 0 (the paper's experiment)
+    and the parallel rings (theta1 = theta2) turned together."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    d = (sweep.position - ws.rest_position) * MM
+    t = np.rad2deg(sweep.theta[:, 0])
+    ax.plot(t, np.linalg.norm(d, axis=1), "k-", lw=2, label="|deflection|, theta2 = 0")
+    ax.plot(t, d[:, 1], "-", color=REACH, label="y, theta2 = 0")
+    ax.plot(t, d[:, 2], "-", color=NEUTRAL, label="z, theta2 = 0")
+    dp = (ws.parallel.position - ws.rest_position) * MM
+    ax.plot(
+        np.rad2deg(ws.parallel.theta[:, 0]),
+        np.linalg.norm(dp, axis=1),
+        "--",
+        color=LOOP,
+        label="|deflection|, theta1 = theta2",
+    )
+    ax.set_xlabel("theta1 [deg]")
+    ax.set_ylabel("tip deflection [mm]")
+    ax.set_xlim(0, 360)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Tip deflection against ring angle")
+    _save(fig, path)
+
+
+def write_workspace_plots(
+    ws: Workspace, sweep: Equilibria, design: Design, out_dir: str | os.PathLike[str]
+) -> list[Path]:
+    """All workspace pictures into ``out_dir``; returns the paths written."""
+    out = Path(out_dir)
+    paths = [out / "top.png", out / "side.png", out / "section.png", out / "deflection.png"]
+    plot_projection(ws, design, paths[0], (0, 1), "Top view (x-y plane)")
+    plot_projection(ws, design, paths[1], (0, 2), "Side view (x-z plane)")
+    plot_section(ws, paths[2])
+    plot_deflection(sweep, ws, paths[3])
+    return paths

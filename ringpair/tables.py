@@ -1,0 +1,72 @@
+"""CSV tables of simulated tip poses (columns named as in spec/formats.md)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+
+import numpy as np
+
+from design.atomic import write_text
+from design.equilibrium import Equilibria
+
+POSE_COLUMNS = (
+    "theta1_deg",
+    "theta2_deg",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "tangent_x",
+    "tangent_y",
+    "tangent_z",
+    "deflection_mm",
+    "converged",
+    "stable",
+)
+
+
+def pose_rows(eq: Equilibria, commanded_deg: np.ndarray, rest: np.ndarray) -> list[dict]:
+    """One row per configuration: commanded angles [deg], tip [mm], tangent, flags."""
+    rows = []
+    deflection = np.linalg.norm(eq.position - rest, axis=1) * 1e3
+    for k in range(len(eq)):
+        p, t = eq.position[k] * 1e3, eq.tangent[k]
+        rows.append(
+            {
+                "theta1_deg": float(commanded_deg[k, 0]),
+                "theta2_deg": float(commanded_deg[k, 1]),
+                "x_mm": p[0],
+                "y_mm": p[1],
+                "z_mm": p[2],
+                "tangent_x": t[0],
+                "tangent_y": t[1],
+                "tangent_z": t[2],
+                "deflection_mm": deflection[k],
+                "converged": bool(eq.converged[k]),
+                "stable": bool(eq.stable[k]),
+            }
+        )
+    return rows
+
+
+def write_csv(
+    path: str | os.PathLike[str], rows: list[dict], columns: tuple[str, ...], header: str = ""
+) -> None:
+    """Write rows atomically; floats with 9 significant digits, NaN as an empty cell."""
+    buf = io.StringIO()
+    for line in header.splitlines():
+        buf.write(f"# {line}\n")
+    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: _cell(row[k]) for k in columns})
+    write_text(path, buf.getvalue())
+
+
+def _cell(value: object) -> str:
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, float | np.floating):
+        return "" if not np.isfinite(value) else f"{float(value):.9g}"
+    return str(value)
