@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from design.atomic import write_text
@@ -37,7 +38,9 @@ class UserError(click.ClickException):
     exit_code = 2
 
     def show(self, file: object = None) -> None:
-        err_console.print(f"[bold red]error:[/] {self.message}", highlight=False)
+        err_console.print(
+            f"[bold red]error:[/] {escape(self.message)}", highlight=False, soft_wrap=True
+        )
 
 
 def _design(path: Path | None) -> Design:

@@ -54,8 +54,7 @@ def test_out_of_plane_loads_by_integrating_the_beam_equation():
     sol = solve_ivp(rhs, (0, L), np.zeros(6), rtol=1e-12, atol=1e-15)
     tip = sol.y[:, -1]
     dy, dz, phi_y, phi_z = response(f, tau)
-    np.testing.assert_allclose([dy, dz, phi_y, phi_z], [tip[1], tip[2], tip[4], tip[5]],
-                               rtol=1e-9)
+    np.testing.assert_allclose([dy, dz, phi_y, phi_z], [tip[1], tip[2], tip[4], tip[5]], rtol=1e-9)
 
 
 def test_axial_torque_does_not_bend():

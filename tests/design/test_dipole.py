@@ -48,8 +48,12 @@ def test_gradient_is_the_derivative_of_the_field():
     rng = np.random.default_rng(2)
     for _ in range(20):
         p, m = rng.normal(size=3) * 0.1, rng.normal(size=3) * 50
-        np.testing.assert_allclose(np.asarray(GRADIENT(p, m)), np.asarray(exact(p, m)),
-                                   rtol=1e-11, atol=1e-12 * np.abs(np.asarray(exact(p, m))).max())
+        np.testing.assert_allclose(
+            np.asarray(GRADIENT(p, m)),
+            np.asarray(exact(p, m)),
+            rtol=1e-11,
+            atol=1e-12 * np.abs(np.asarray(exact(p, m))).max(),
+        )
 
 
 def test_gradient_is_symmetric_and_traceless():

@@ -30,8 +30,7 @@ def test_force_is_minus_gradient_of_energy():
     # f = grad(m . B) = -grad U (Jackson eq. 5.69), by central finite differences of U.
     p, m = np.array([0.15, 0.01, 0.005]), np.array([0.0, 4e-3, 3e-3])
     h = 1e-6
-    fd = [-(float(ENERGY(p + h * e, m)) - float(ENERGY(p - h * e, m))) / (2 * h)
-          for e in np.eye(3)]
+    fd = [-(float(ENERGY(p + h * e, m)) - float(ENERGY(p - h * e, m))) / (2 * h) for e in np.eye(3)]
     np.testing.assert_allclose(np.asarray(FORCE(p, m)).ravel(), fd, rtol=1e-7)
 
 
@@ -48,14 +47,12 @@ def test_axial_torque_is_minus_derivative_of_energy_by_ring_angle():
         th = np.array([angle, 0.0])
         h = 1e-6
         du = (float(energy(th + [h, 0])) - float(energy(th - [h, 0]))) / (2 * h)
-        assert float(np.asarray(torque(th)).ravel() @ n) == pytest.approx(-du, rel=1e-7,
-                                                                           abs=1e-16)
+        assert float(np.asarray(torque(th)).ravel() @ n) == pytest.approx(-du, rel=1e-7, abs=1e-16)
 
 
 def _wrench(angles, spacing, field_model, frame_vec=(0.0, 0.0, 0.0)):
     frame = rotation_from_vector(ca.DM(frame_vec))
-    f, t = tip_wrench(field_model, ca.DM([0.15, 0.0, 0.0]), frame, ca.DM(angles), 5.4e-3,
-                      spacing)
+    f, t = tip_wrench(field_model, ca.DM([0.15, 0.0, 0.0]), frame, ca.DM(angles), 5.4e-3, spacing)
     return np.asarray(ca.evalf(f)).ravel(), np.asarray(ca.evalf(t)).ravel()
 
 

@@ -1,0 +1,123 @@
+"""Batch equilibrium: closed-form equilibria and stability limits, flags, batching."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import design.equilibrium as equilibrium
+from design.dipole import K_DIPOLE
+from design.equilibrium import solve_design, solve_equilibria
+from design.model import RingPairModel
+from design.parameters import BASELINE
+
+MODEL = RingPairModel()
+L, EI, M_RING = 0.15, 3.9e-4, 5.4e-3
+FAR = 1e5  # [m]: a dipole this far away makes a uniform field (gradient 3 B / FAR)
+
+
+def uniform_field_params(b: float, direction: str) -> np.ndarray:
+    """Parameters whose external dipole gives a uniform field B = b along +x or -y at the tip."""
+    values = dict.fromkeys(BASELINE, 0.0)
+    values.update(free_length=L, bending_rigidity=EI, ring_moment=M_RING, ring_spacing=0.0)
+    moment = b * FAR**3 / (2 * K_DIPOLE)  # on the dipole's axis B = 2 k m / r^3
+    if direction == "+x":  # dipole on the x axis beyond the tip, moment along +x
+        values.update(external_center_x=L + FAR, external_moment_x=moment)
+    else:  # dipole on the y axis at +FAR, moment along -y: B along -y at the tip
+        values.update(external_center_x=L, external_center_y=FAR, external_moment_y=-moment)
+    return np.array([values[n] for n in BASELINE])
+
+
+def test_tip_moment_in_uniform_field_matches_closed_form():
+    # Rings along y_tip in a uniform field b x: the tip turns by psi with
+    # EI psi / L = 2 m b cos(psi) (linear cantilever under a rotating tip moment), and
+    # deflects by L^2 / (2 EI) * 2 m b cos(psi) (Gere & Goodno, App. G case 6).
+    for lam in (0.2, 1.0, 2.5):
+        b = lam * EI / (2 * M_RING * L)
+        eq = solve_equilibria(MODEL, uniform_field_params(b, "+x"), 0.0, 0.0)
+        psi = brentq(lambda x, lam=lam: x - lam * np.cos(x), 0, np.pi / 2)
+        assert eq.converged[0] and eq.stable[0]
+        assert -eq.coordinates[0, 3] == pytest.approx(psi, rel=1e-5)
+        moment = 2 * M_RING * b * np.cos(psi)
+        assert -eq.position[0, 1] == pytest.approx(L**2 / (2 * EI) * moment, rel=1e-5)
+        tangent = eq.tangent[0]
+        assert np.arctan2(-tangent[1], tangent[0]) == pytest.approx(psi, rel=1e-5)
+
+
+def test_antialigned_rings_lose_stability_at_2mB_equal_EI_over_L():
+    # Straight robot, both rings antiparallel to a uniform field: the tangent stiffness of
+    # the (dy, phi_z) plane, [[12EI/L^3, -6EI/L^2], [-6EI/L^2, 4EI/L - 2mB]], loses
+    # definiteness at 2 m B = EI / L (derived in design/cantilever.py's stiffness).
+    critical = EI / (2 * M_RING * L)
+    theta_along_plus_y = 0.0  # rings along +y, field along -y
+    below = solve_equilibria(
+        MODEL, uniform_field_params(0.95 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
+    )
+    above = solve_equilibria(
+        MODEL, uniform_field_params(1.05 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
+    )
+    aligned = solve_equilibria(MODEL, uniform_field_params(1.05 * critical, "-y"), np.pi, np.pi)
+    assert below.converged[0] and below.stable[0]
+    assert above.converged[0] and not above.stable[0]
+    assert aligned.converged[0] and aligned.stable[0]
+    # Still next to the straight state (the far dipole's tiny gradient nudges it).
+    assert np.abs(above.coordinates[0]).max() < 1e-3
+
+
+def test_unconverged_configurations_are_flagged_and_never_numbers(demonstrator, monkeypatch):
+    # An unattainable tolerance: nothing may be reported as converged, every pose is NaN.
+    monkeypatch.setattr(equilibrium, "TOLERANCE", 0.0)
+    eq = solve_design(demonstrator, np.linspace(0, 3, 5), 0.0)
+    assert not eq.converged.any() and not eq.stable.any()
+    assert np.isnan(eq.position).all() and np.isnan(eq.frame).all()
+
+
+def test_continuation_rescues_what_few_newton_steps_miss(demonstrator, monkeypatch):
+    theta = np.linspace(0, 2 * np.pi, 13)
+    reference = solve_design(demonstrator, theta, 0.0)
+    monkeypatch.setattr(equilibrium, "NEWTON_STEPS", 2)
+    equilibrium.newton_function.cache_clear()
+    equilibrium._mapped.cache_clear()
+    try:
+        params = MODEL.parameters(demonstrator)
+        direct = equilibrium._run(
+            MODEL, np.zeros((4, theta.size)), np.vstack([theta, 0 * theta]), params
+        )
+        assert (direct[1][0] > equilibrium.TOLERANCE).any()  # two steps are not enough
+        rescued = solve_design(demonstrator, theta, 0.0)
+    finally:
+        equilibrium.newton_function.cache_clear()
+        equilibrium._mapped.cache_clear()
+    assert rescued.converged.all()
+    np.testing.assert_allclose(rescued.position, reference.position, atol=1e-12)
+
+
+def test_batch_equals_one_by_one_across_chunks(demonstrator, monkeypatch):
+    monkeypatch.setattr(equilibrium, "CHUNK", 7)  # several chunks and a padded last one
+    equilibrium._mapped.cache_clear()
+    rng = np.random.default_rng(3)
+    t1, t2 = rng.uniform(0, 2 * np.pi, (2, 23))
+    batch = solve_design(demonstrator, t1, t2)
+    equilibrium._mapped.cache_clear()
+    for k in (0, 6, 7, 22):
+        one = solve_design(demonstrator, t1[k], t2[k])
+        np.testing.assert_allclose(one.position[0], batch.position[k], atol=1e-15)
+        np.testing.assert_allclose(one.frame[0], batch.frame[k], atol=1e-15)
+    assert batch.converged.all() and batch.stable.all()
+
+
+def test_tip_frame_is_orthonormal_and_right_handed(demonstrator):
+    eq = solve_design(demonstrator, np.linspace(0, 6, 11), np.linspace(1, 2, 11))
+    for frame in eq.frame:
+        np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-14)
+        assert np.linalg.det(frame) == pytest.approx(1.0, abs=1e-14)
+    np.testing.assert_allclose(eq.tangent, eq.frame[:, :, 0])
+
+
+def test_demonstrator_parallel_rings_deflect_towards_plus_y(demonstrator):
+    # Both rings along +y: the field of the -x magnetised cylinder (B along -x at the tip)
+    # turns them towards +y... and its gradient pulls them the same way (dBy/dy > 0).
+    eq = solve_design(demonstrator, 0.0, 0.0)
+    assert eq.position[0, 1] > 0.015
+    assert abs(eq.position[0, 2]) < 1e-12
