@@ -49,7 +49,9 @@ def compile_function(function: ca.Function) -> ca.Function:
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     gen.add(function)
     source = gen.dump()
-    digest = hashlib.sha256((source + " ".join(CFLAGS) + ca.__version__).encode()).hexdigest()
+    digest = hashlib.sha256(
+        (source + " ".join(CFLAGS) + ca.CasadiMeta.version()).encode()
+    ).hexdigest()
     key = f"{name}_{digest[:20]}"
     if key in _loaded:
         return _loaded[key]

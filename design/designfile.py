@@ -122,7 +122,7 @@ def _vector(path: str, value: Any, key: Key) -> tuple[float, float, float]:
     return (float(value[0]), float(value[1]), float(value[2]))
 
 
-def _section(doc: dict[str, Any], name: str) -> dict[str, float | tuple[float, float, float]]:
+def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
     """Read one section's numeric keys into SI values, checking names, types and ranges."""
     node: Any = doc
     for part in name.split("."):
@@ -138,7 +138,7 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, float | tuple[float, f
         if given not in keys and given not in subsections and given not in extra:
             allowed = set(keys) | subsections | extra
             raise DesignError(f"unknown key {name}.{given}{_suggest(given, allowed)}")
-    out: dict[str, float | tuple[float, float, float]] = {}
+    out: dict[str, Any] = {}
     for key in keys.values():
         path = f"{name}.{key.name}"
         if key.name not in node:
@@ -157,12 +157,12 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, float | tuple[float, f
 def _tube(doc: dict[str, Any], name: str) -> Tube:
     s = _section(doc, name)
     od, idia = s["outer_diameter_mm"], s["inner_diameter_mm"]
-    if idia >= od:  # type: ignore[operator]
+    if idia >= od:
         raise DesignError(
             f"{name}.inner_diameter_mm must be smaller than outer_diameter_mm "
-            f"({od / MM:g}); got {idia / MM:g}"  # type: ignore[operator]
+            f"({od / MM:g}); got {idia / MM:g}"
         )
-    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"])  # type: ignore[arg-type]
+    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"])
 
 
 def design_from_dict(doc: dict[str, Any]) -> Design:
@@ -186,16 +186,16 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
             f"({catheter.inner_diameter / MM:g}) so the wire fits inside the catheter; "
             f"got {wire.outer_diameter / MM:g}"
         )
-    robot = Robot(robot_s["free_length_mm"], catheter, wire)  # type: ignore[arg-type]
+    robot = Robot(robot_s["free_length_mm"], catheter, wire)
 
     t = _section(doc, "tip")
     tip = Tip(
         t["magnet_outer_diameter_mm"],
-        t["magnet_inner_diameter_mm"],  # type: ignore[arg-type]
+        t["magnet_inner_diameter_mm"],
         t["magnet_length_mm"],
         t["remanence_t"],
         t["gap_mm"],
-        t["density_kg_m3"],  # type: ignore[arg-type]
+        t["density_kg_m3"],
     )
     if tip.magnet_inner_diameter >= tip.magnet_outer_diameter:
         raise DesignError(
@@ -217,26 +217,26 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
             f"got {shape!r}"
         )
     mag = e["magnetization"]
-    norm = math.sqrt(sum(c * c for c in mag))  # type: ignore[union-attr]
+    norm = math.sqrt(sum(c * c for c in mag))
     if abs(norm - 1.0) > UNIT_TOLERANCE:
         raise DesignError(
             "external_magnet.magnetization must be a unit vector (length 1 within "
-            f"{UNIT_TOLERANCE:g}); got {list(mag)} of length {norm:.6g}"  # type: ignore[arg-type]
+            f"{UNIT_TOLERANCE:g}); got {list(mag)} of length {norm:.6g}"
         )
-    mag = tuple(c / norm for c in mag)  # type: ignore[union-attr]
+    mag = tuple(c / norm for c in mag)
     ext = ExternalMagnet(
         shape,
         e["diameter_mm"],
         e["length_mm"],
-        e["remanence_t"],  # type: ignore[arg-type]
+        e["remanence_t"],
         e["center_mm"],
-        mag,  # type: ignore[arg-type]
+        mag,
     )
 
     environment = Environment()
     if "environment" in doc:
         env = _section(doc, "environment")
-        environment = Environment(gravity=env.get("gravity_m_s2"))  # type: ignore[arg-type]
+        environment = Environment(gravity=env.get("gravity_m_s2"))
 
     design = Design(name, robot, tip, ext, environment, description)
     _check_clearance(design)

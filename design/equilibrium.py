@@ -16,6 +16,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from design.compiled import compile_function
 from design.model import N_COORDINATES, RingPairModel
@@ -92,9 +93,9 @@ def _evaluate(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]
     flat = [np.asfortranarray(a).ravel(order="F") for a in args]
     outs = [np.empty(function.nnz_out(i)) for i in range(function.n_out())]
     for i, a in enumerate(flat):
-        buf.set_arg(i, memoryview(a))
+        buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
     for i, o in enumerate(outs):
-        buf.set_res(i, memoryview(o))
+        buf.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
     trigger()
     return [o.reshape(function.size2_out(i), function.size1_out(i)).T for i, o in enumerate(outs)]
 
@@ -125,8 +126,8 @@ def _run(
 def solve_equilibria(
     model: RingPairModel,
     params: np.ndarray,
-    theta1: np.ndarray,
-    theta2: np.ndarray,
+    theta1: ArrayLike,
+    theta2: ArrayLike,
 ) -> Equilibria:
     """Equilibria for ring angles (theta1[i], theta2[i]) at the tip. [rad]
 
@@ -173,7 +174,7 @@ def solve_equilibria(
 
 
 def solve_design(
-    design: Design, theta1: np.ndarray, theta2: np.ndarray, model: RingPairModel | None = None
+    design: Design, theta1: ArrayLike, theta2: ArrayLike, model: RingPairModel | None = None
 ) -> Equilibria:
     """Equilibria of ``design`` (baseline model unless given) for tip angles. [rad]"""
     model = model or RingPairModel()
