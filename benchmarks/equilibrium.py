@@ -54,7 +54,7 @@ def main() -> None:
         q_loop[k] = fsolve(fun, np.zeros(4), fprime=jac, xtol=1e-12)
     t_loop = time.perf_counter() - t0
 
-    agree = np.abs(q_loop - eq.coordinates[: args.loop]).max()
+    agree = np.abs(q_loop - eq.unknowns[: args.loop]).max()
     rate_batch = args.n / t_batch
     rate_loop = len(sub) / t_loop
     print(f"configurations: {args.n} (demonstrator, random ring angles)")

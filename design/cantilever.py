@@ -83,3 +83,17 @@ def stiffness(free_length: Any, bending_rigidity: Any) -> ca.SX:
         ca.horzcat(0, k_fm, k_mm, 0),
         ca.horzcat(-k_fm, 0, 0, k_mm),
     )
+
+
+def distributed_load_response(load_per_length: ca.SX, free_length: Any,
+                              bending_rigidity: Any) -> ca.SX:
+    """Coordinates q of the linear cantilever under a uniform load w per unit length, fixed in
+    the base frame (self-weight). M(s) = (L - s)^2 / 2 e1 x w integrates to
+    delta = L^4 / (8 EI) w_perp and phi = L^3 / (6 EI) e1 x w (Gere & Goodno, App. G case 1).
+    load_per_length : shape (3,), base frame. [N/m]
+    Returns q, shape (4,). [m, m, rad, rad]
+    """
+    w = load_per_length
+    a = free_length**4 / (8 * bending_rigidity)
+    b = free_length**3 / (6 * bending_rigidity)
+    return ca.vertcat(a * w[1], a * w[2], -b * w[2], b * w[1])

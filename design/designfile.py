@@ -23,6 +23,8 @@ from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 
 MM = 1e-3
 MPA = 1e6
+DEG = math.pi / 180
+GRAM = 1e-3
 
 
 class DesignError(ValueError):
@@ -45,6 +47,8 @@ class Key:
     high: float | None = None
     low_open: bool = False
     vector: bool = False
+    default: float | None = None
+    """Optional key (the project's addition to the spec) when not None; its value in SI."""
 
     def expected(self) -> str:
         if self.vector:
@@ -64,6 +68,8 @@ def _tube_keys() -> tuple[Key, ...]:
         Key("youngs_modulus_mpa", "Young's modulus [MPa]", MPA, 0.0, None, True),
         Key("poisson_ratio", "Poisson's ratio [-]", 1.0, -1.0, 0.5, True),
         Key("density_kg_m3", "density [kg/m^3]", 1.0, 0.0, None, True),
+        Key("friction_angle_deg", "optional: backlash/friction play of the transmission [deg]",
+            DEG, 0.0, 90.0, default=0.0),
     )
 
 
@@ -78,6 +84,7 @@ SECTIONS: dict[str, tuple[Key, ...]] = {
         Key("remanence_t", "ring remanence [T]", 1.0, 0.0, 1.6),
         Key("gap_mm", "face-to-face gap [mm]", MM, 0.0),
         Key("density_kg_m3", "ring density [kg/m^3]", 1.0, 0.0, None, True),
+        Key("mass_g", "optional: extra tip mass, mounting pieces [g]", GRAM, 0.0, default=0.0),
     ),
     "external_magnet": (
         Key("diameter_mm", "cylinder diameter [mm]", MM, 0.0, None, True),
@@ -142,6 +149,9 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
     for key in keys.values():
         path = f"{name}.{key.name}"
         if key.name not in node:
+            if key.default is not None:
+                out[key.name] = key.default
+                continue
             if path in OPTIONAL_KEYS:
                 continue
             raise DesignError(f"missing key {path} ({key.meaning}); expected {key.expected()}")
@@ -162,7 +172,8 @@ def _tube(doc: dict[str, Any], name: str) -> Tube:
             f"{name}.inner_diameter_mm must be smaller than outer_diameter_mm "
             f"({od / MM:g}); got {idia / MM:g}"
         )
-    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"])
+    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"],
+                s["friction_angle_deg"])
 
 
 def design_from_dict(doc: dict[str, Any]) -> Design:
@@ -196,6 +207,7 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
         t["remanence_t"],
         t["gap_mm"],
         t["density_kg_m3"],
+        t["mass_g"],
     )
     if tip.magnet_inner_diameter >= tip.magnet_outer_diameter:
         raise DesignError(
@@ -309,13 +321,16 @@ def design_to_dict(design: Design) -> dict[str, Any]:
     """The design-file document (file units) of a :class:`Design`."""
 
     def tube(t: Tube) -> dict[str, float]:
-        return {
+        doc = {
             "outer_diameter_mm": _file_units(t.outer_diameter, MM),
             "inner_diameter_mm": _file_units(t.inner_diameter, MM),
             "youngs_modulus_mpa": _file_units(t.youngs_modulus, MPA),
             "poisson_ratio": t.poisson_ratio,
             "density_kg_m3": t.density,
         }
+        if t.friction_angle:
+            doc["friction_angle_deg"] = _file_units(t.friction_angle, DEG)
+        return doc
 
     tip, ext = design.tip, design.external_magnet
     doc: dict[str, Any] = {"name": design.name}
@@ -334,6 +349,8 @@ def design_to_dict(design: Design) -> dict[str, Any]:
         "gap_mm": _file_units(tip.gap, MM),
         "density_kg_m3": tip.density,
     }
+    if tip.mass:
+        doc["tip"]["mass_g"] = _file_units(tip.mass, GRAM)
     doc["external_magnet"] = {
         "shape": ext.shape,
         "diameter_mm": _file_units(ext.diameter, MM),

@@ -1,12 +1,14 @@
-"""Batch equilibrium of the ring-pair robot: Newton's method from the straight robot.
+"""Equilibrium of the ring-pair robot: Newton's method, in batch or along a command path.
 
-The magnetic wrench depends on the tip pose, so the steady state solves r(q) = 0
-(:mod:`design.model`). For N configurations at once, a fixed number of Newton steps is
-unrolled into one compiled function and mapped over the batch; configurations whose
-residual is not below tolerance afterwards are re-solved by load continuation (the ring
-moments ramped from zero), and any still unconverged are flagged and returned as NaN.
-An equilibrium is stable when the symmetric part of the tangent stiffness K - dQ/dq is
-positive definite (Sylvester's criterion on its diagonally scaled form).
+The magnetic wrench depends on the tip pose, so the steady state solves r(x) = 0
+(:mod:`design.model`). For N independent configurations a fixed number of Newton steps
+from the straight robot is compiled into one function and mapped over the batch;
+configurations whose residual is not below tolerance afterwards are re-solved by load
+continuation (all loads ramped from zero), and any still unconverged are flagged and
+returned as NaN. Along an ordered command path (:func:`solve_sequence`) each state starts
+from the previous one, so the robot follows its branch of equilibria as a real one does:
+friction play (``hysteresis``) acts on the commands, and a jump to another branch
+(snap-through of a lagging ring) is detected and flagged.
 """
 
 from __future__ import annotations
@@ -19,64 +21,78 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from design.compiled import compile_function
-from design.model import N_COORDINATES, RingPairModel
+from design.friction import play
+from design.model import RingPairModel
+from design.parameters import index
 from design.params import Design
 
 NEWTON_STEPS = 6
 TOLERANCE = 1e-10
-"""Convergence: infinity norm of the residual q - C Q(q) below this. [m or rad]"""
+"""Convergence: infinity norm of the scaled residual below this. [m or rad]"""
 CHUNK = 65536
 THREADS = 2
 CONTINUATION_STEPS = (4, 16, 64)
+SUBSTEP = np.deg2rad(1.0)
+"""Largest command increment per solve along a path. [rad]"""
+SNAP_LAG_JUMP = 0.1
+"""A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
+jump to another branch of equilibria (snap-through). [rad]"""
+INLINE_LIMIT = 20000
+"""Residuals cheaper than this many operations are inlined into the unrolled Newton steps;
+costlier ones are called (smaller C code, faster compilation)."""
 
 
 @dataclass(frozen=True)
 class Equilibria:
     """Steady states of N configurations. Unconverged rows hold NaN in every pose array.
 
-    theta : shape (N, 2), ring angles at the tip (theta1 distal, theta2 proximal). [rad]
+    command : shape (N, 2), ring angles commanded at the base (theta1 distal, theta2). [rad]
+    tip_angles : shape (N, 2), ring angles at the tip (differ with torsion/hysteresis). [rad]
     position : shape (N, 3), rod tip (proximal ring centre), base frame. [m]
     tangent : shape (N, 3), unit tip tangent, base frame. [-]
     frame : shape (N, 3, 3), tip frame, columns (tangent, y_tip, z_tip), base frame. [-]
-    coordinates : shape (N, 4), cantilever coordinates (dy, dz, phi_y, phi_z). [m, rad]
+    unknowns : shape (N, n), the model's unknowns x at equilibrium. [SI]
     converged : shape (N,), residual below TOLERANCE.
-    stable : shape (N,), converged and the tangent stiffness is positive definite.
+    stable : shape (N,), converged and the equilibrium is stable.
     residual : shape (N,), infinity norm of the final residual. [m or rad]
+    snapped : shape (N,), along a path: the robot jumped to another branch on its way here.
     """
 
-    theta: np.ndarray
+    command: np.ndarray
+    tip_angles: np.ndarray
     position: np.ndarray
     tangent: np.ndarray
     frame: np.ndarray
-    coordinates: np.ndarray
+    unknowns: np.ndarray
     converged: np.ndarray
     stable: np.ndarray
     residual: np.ndarray
+    snapped: np.ndarray
 
     def __len__(self) -> int:
         return len(self.converged)
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=16)
 def newton_function(model: RingPairModel) -> ca.Function:
-    """Compiled single-configuration solver:
-    (q0, theta, params) -> (q, |r|_inf, leading minors of scaled sym(H), position, frame)."""
-    q0 = ca.SX.sym("q0", N_COORDINATES)
-    theta = ca.SX.sym("theta", 2)
-    prm = ca.SX.sym("params", len(model.parameter_names))
-    q = q0
+    """Compiled single-configuration solver: (x0, command, params) ->
+    (x, |r|_inf, stability indicator, position, frame (9, column-major), tip angles)."""
+    inline = model.residual.n_instructions() < INLINE_LIMIT
+    sym = ca.SX.sym if inline else ca.MX.sym
+    x0 = sym("x0", model.n_unknowns)
+    command = sym("command", 2)
+    prm = sym("params", model.residual.size1_in(2))
+    x = x0
     for _ in range(NEWTON_STEPS):
-        r, jac, _h = model.residual(q, theta, prm)
-        q = q - ca.solve(jac, r)
-    r, _jac, h = model.residual(q, theta, prm)
-    hs = 0.5 * (h + h.T)
-    # Diagonal scaling (a congruence, so definiteness is unchanged) makes the minors O(1).
-    k_scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
-    hn = hs * (k_scale @ k_scale.T)
-    minors = ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, N_COORDINATES + 1)])
-    position, frame = model.pose(q, prm)
+        r, jac = model.residual(x, command, prm)
+        x = x - ca.solve(jac, r) if inline else x - ca.solve(jac, r, "qr")
+    r, _ = model.residual(x, command, prm)
+    indicator = model.stability(x, command, prm)
+    position, frame, angles = model.pose(x, command, prm)
     fn = ca.Function(
-        "newton", [q0, theta, prm], [q, ca.norm_inf(r), minors, position, ca.reshape(frame, 9, 1)]
+        "newton",
+        [x0, command, prm],
+        [x, ca.norm_inf(r), indicator, position, ca.reshape(frame, 9, 1), angles],
     )
     return compile_function(fn)
 
@@ -101,21 +117,21 @@ def _evaluate(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]
 
 
 def _run(
-    model: RingPairModel, q0: np.ndarray, theta: np.ndarray, params: np.ndarray
+    model: RingPairModel, x0: np.ndarray, command: np.ndarray, params: np.ndarray
 ) -> tuple[np.ndarray, ...]:
-    """Run the compiled solver on columns (q0, theta, params), in fixed-size chunks.
+    """Run the compiled solver on columns (x0, command, params), in fixed-size chunks.
 
     params : shape (n,) shared by all columns, or (n, N) one per column.
     """
-    n = theta.shape[1]
+    n = command.shape[1]
     size = min(CHUNK, n)
     if params.ndim == 1:
         params = np.broadcast_to(params[:, None], (params.size, n))
-    outs: list[list[np.ndarray]] = [[] for _ in range(5)]
+    outs: list[list[np.ndarray]] = [[] for _ in range(6)]
     for start in range(0, n, size):
         stop = min(start + size, n)
         pad = size - (stop - start)
-        args = [a[:, start:stop] for a in (q0, theta, params)]
+        args = [a[:, start:stop] for a in (x0, command, params)]
         if pad:
             args = [np.pad(a, ((0, 0), (0, pad)), mode="edge") for a in args]
         for acc, out in zip(outs, _evaluate(_mapped(model, size), args), strict=True):
@@ -123,59 +139,134 @@ def _run(
     return tuple(np.concatenate(acc, axis=1) for acc in outs)
 
 
-def solve_equilibria(
-    model: RingPairModel,
-    params: np.ndarray,
-    theta1: ArrayLike,
-    theta2: ArrayLike,
-) -> Equilibria:
-    """Equilibria for ring angles (theta1[i], theta2[i]) at the tip. [rad]
+def _initial(model: RingPairModel, command: np.ndarray, params: np.ndarray) -> np.ndarray:
+    return np.asarray(model.initial.map(command.shape[1])(command, params))
 
-    params : model parameter vector, shape (n,), from ``model.parameters(design)``. [SI]
-    theta1, theta2 : broadcastable arrays of tip angles. [rad]
-    """
-    t1, t2 = np.broadcast_arrays(
-        np.asarray(theta1, float).ravel(), np.asarray(theta2, float).ravel()
-    )
-    theta = np.vstack([t1, t2])
-    n = theta.shape[1]
-    params = np.asarray(params, dtype=float)
-    q, res, minors, pos, frame = _run(model, np.zeros((N_COORDINATES, n)), theta, params)
-    bad = ~(res[0] < TOLERANCE)
-    ring = model.parameter_names.index("ring_moment")
+
+def _solve_columns(
+    model: RingPairModel, params: np.ndarray, command: np.ndarray
+) -> list[np.ndarray]:
+    """Newton from the straight robot, then load continuation for what did not converge."""
+    outs = list(_run(model, _initial(model, command, params), command, params))
+    bad = ~(outs[1][0] < TOLERANCE)
+    scale = index("load_scale")
     for steps in CONTINUATION_STEPS:
         idx = np.flatnonzero(bad)
         if idx.size == 0:
             break
-        qc = np.zeros((N_COORDINATES, idx.size))
-        sub = theta[:, idx]
+        sub = command[:, idx]
+        prm = np.repeat(params[:, None], idx.size, axis=1)
+        xc = _initial(model, sub, prm)
         for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            prm = np.repeat(params[:, None], idx.size, axis=1)
-            prm[ring] *= lam
-            out = _run(model, qc, sub, prm)
-            qc = np.where(np.isfinite(out[0]), out[0], qc)
-        for arr, new in zip((q, res, minors, pos, frame), out, strict=True):
+            prm[scale] = lam * params[scale]
+            out = _run(model, xc, sub, prm)
+            xc = np.where(np.isfinite(out[0]), out[0], xc)
+        for arr, new in zip(outs, out, strict=True):
             arr[:, idx] = new
-        bad = ~(res[0] < TOLERANCE)
-    converged = ~bad
-    stable = converged & np.all(minors > 0, axis=0)
+        bad = ~(outs[1][0] < TOLERANCE)
+    return outs
+
+
+def _equilibria(
+    command: np.ndarray, outs: list[np.ndarray], snapped: np.ndarray | None = None
+) -> Equilibria:
+    x, res, indicator, pos, frame, angles = outs
+    n = command.shape[1]
+    converged = res[0] < TOLERANCE
+    stable = converged & np.all(indicator > 0, axis=0)
     nan = np.where(converged, 1.0, np.nan)
     frames = frame.T.reshape(n, 3, 3).transpose(0, 2, 1) * nan[:, None, None]
     return Equilibria(
-        theta=theta.T.copy(),
+        command=command.T.copy(),
+        tip_angles=angles.T * nan[:, None],
         position=pos.T * nan[:, None],
         tangent=frames[:, :, 0].copy(),
         frame=frames,
-        coordinates=q.T * nan[:, None],
+        unknowns=x.T * nan[:, None],
         converged=converged,
         stable=stable,
         residual=res[0].copy(),
+        snapped=np.zeros(n, bool) if snapped is None else snapped,
     )
 
 
-def solve_design(
-    design: Design, theta1: ArrayLike, theta2: ArrayLike, model: RingPairModel | None = None
+def _commands(theta1: ArrayLike, theta2: ArrayLike) -> np.ndarray:
+    t1, t2 = np.broadcast_arrays(
+        np.asarray(theta1, float).ravel(), np.asarray(theta2, float).ravel()
+    )
+    return np.vstack([t1, t2])
+
+
+def solve_equilibria(
+    model: RingPairModel, params: np.ndarray, theta1: ArrayLike, theta2: ArrayLike
 ) -> Equilibria:
-    """Equilibria of ``design`` (baseline model unless given) for tip angles. [rad]"""
+    """Independent equilibria for commanded ring angles (theta1[i], theta2[i]). [rad]
+
+    Each configuration starts from the straight robot. ``hysteresis`` needs an order, so
+    here it is ignored (the commands are taken as reached from the centre of the play);
+    use :func:`solve_sequence` for ordered commands.
+    params : model parameter vector, shape (n,), from ``model.parameters(design)``. [SI]
+    """
+    command = _commands(theta1, theta2)
+    return _equilibria(command, _solve_columns(model, np.asarray(params, float), command))
+
+
+def solve_sequence(
+    model: RingPairModel, params: np.ndarray, theta1: ArrayLike, theta2: ArrayLike
+) -> Equilibria:
+    """Equilibria along an ordered path of commanded angles, as the robot is driven. [rad]
+
+    The first command is solved from the straight robot; each later one is reached in
+    sub-steps of at most SUBSTEP, each Newton solve starting from the previous state, so
+    the robot stays on its branch. With ``hysteresis`` the commands first pass through each
+    transmission's play (:func:`design.friction.play`). Where the branch ends (Newton fails
+    or the state turns unstable) or a ring's lag jumps by more than SNAP_LAG_JUMP, the state
+    is re-solved from scratch and ``snapped`` is set for that command.
+    """
+    params = np.asarray(params, float)
+    command = _commands(theta1, theta2)
+    effective = command
+    if "hysteresis" in model.effects:
+        width = np.array(
+            [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
+        )
+        effective = play(command, width)
+    solver = newton_function(model)
+    first = _solve_columns(model, params, effective[:, :1])
+    columns = [[o[:, 0] for o in first]]
+    snapped = np.zeros(command.shape[1], bool)
+    for k in range(1, command.shape[1]):
+        prev = columns[-1]
+        a, b = effective[:, k - 1], effective[:, k]
+        n_sub = max(1, int(np.ceil(np.abs(b - a).max() / SUBSTEP)))
+        for j in range(1, n_sub + 1):
+            c = a + (b - a) * j / n_sub
+            out = [np.asarray(o).ravel() for o in solver(prev[0], c, params)]
+            lag_jump = np.abs((out[5] - c) - (prev[5] - (a + (b - a) * (j - 1) / n_sub)))
+            ok = out[1][0] < TOLERANCE and np.all(out[2] > 0)
+            if not ok or lag_jump.max() > SNAP_LAG_JUMP:
+                snapped[k] = True
+                if not ok:
+                    out = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
+            prev = out
+        columns.append(prev)
+    outs = [np.column_stack([col[i] for col in columns]) for i in range(6)]
+    eq = _equilibria(effective, outs, snapped)
+    return Equilibria(**{**eq.__dict__, "command": command.T.copy()})
+
+
+def solve_design(
+    design: Design,
+    theta1: ArrayLike,
+    theta2: ArrayLike,
+    model: RingPairModel | None = None,
+    ordered: bool = False,
+) -> Equilibria:
+    """Equilibria of ``design`` (baseline model unless given) for commanded angles. [rad]
+
+    ordered : follow the commands as a path (:func:`solve_sequence`) instead of solving
+        each from the straight robot; required for ``hysteresis`` and snap-through.
+    """
     model = model or RingPairModel()
-    return solve_equilibria(model, model.parameters(design), theta1, theta2)
+    solve = solve_sequence if ordered else solve_equilibria
+    return solve(model, model.parameters(design), theta1, theta2)

@@ -1,11 +1,26 @@
-"""The ring-pair model: one set of CasADi expressions from which every numeric function
-(equilibrium residual, its Jacobian, tangent stiffness, tip pose, wrench) is built.
+"""The ring-pair model: one set of CasADi expressions, with switchable physical effects,
+from which every numeric function (equilibrium residual, Jacobian, stability indicator,
+tip pose) is built.
 
-Baseline (the paper's model, derived anew): point-dipole external field, linear
-cantilever with a tip wrench, transmissions rigid in torsion, no magnet coupling, no
-gravity. Unknowns are the cantilever coordinates q (see :mod:`design.cantilever`); the
-equilibrium is r(q) = q - C Q(q) = 0 with Q the bending loads of the magnetic wrench at
-the pose q. SI units are used for all inputs and outputs.
+Baseline (the paper's model, derived anew): point-dipole external field, linear cantilever
+under the tip wrench, transmissions rigid in torsion, no ring coupling, no gravity, no
+friction. Effects (spec/formats.md names), each reducing to the baseline in its limit:
+
+- ``near_field``: exact field of the axially magnetised cylinder (:mod:`design.cylinder_field`)
+  instead of its point dipole.
+- ``large_deflection``: Kirchhoff rod (:mod:`design.rod`) instead of the linear cantilever.
+- ``torsion``: each transmission twists under the axial torque on its ring, T = GJ/L (tip
+  angle - commanded angle); the axial torque includes the other ring's
+  (:mod:`design.ring_coupling`). Unknowns gain the two tip angles.
+- ``gravity``: weight of catheter and wire (distributed) and of rings and tip mass (at the
+  tip), along ``environment.gravity_m_s2``.
+- ``hysteresis``: backlash/friction play in each transmission; acts on ordered command
+  sequences (:func:`design.equilibrium.solve_sequence`) through :func:`play`.
+
+Unknowns x: rod coordinates (linear: q = (dy, dz, phi_y, phi_z); large deflection: the
+base internal force and moment), then the tip angles with ``torsion``. The residual is
+scaled to metres/radians (its infinity norm is the convergence measure). SI units are
+used for all inputs and outputs.
 """
 
 from __future__ import annotations
@@ -17,96 +32,222 @@ import numpy as np
 
 from design import cantilever
 from design.dipole import dipole_field, dipole_field_gradient
-from design.parameters import BASELINE, parameter_vector
+from design.magnets import cylinder_moment, ring_moment, ring_volume
+from design.parameters import NAMES, parameter_vector
 from design.params import Design
+from design.sections import polar_moment_of_area, second_moment_of_area, shear_modulus
 from design.wrench import tip_wrench
 
 EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
-"""Model extensions by name (spec/formats.md); none is implemented in the baseline yet."""
+"""Model extensions by name (spec/formats.md)."""
 
-N_COORDINATES = 4
+
+def parse_effects(text: str) -> frozenset[str]:
+    """'none', 'all' or a comma list of effect names; ValueError names the bad one."""
+    text = text.strip()
+    if text in ("", "none", "baseline"):
+        return frozenset()
+    if text == "all":
+        return frozenset(EFFECTS)
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    bad = [n for n in names if n not in EFFECTS]
+    if bad:
+        raise ValueError(
+            f"unknown model effect {bad[0]!r}; expected 'none', 'all' or a comma "
+            f"list of {', '.join(EFFECTS)}"
+        )
+    return frozenset(names)
+
+
+class Symbols(dict):
+    """Parameter symbols by name, with the derived quantities the model uses."""
+
+    def __init__(self, prm: ca.SX) -> None:
+        super().__init__(zip(NAMES, ca.vertsplit(prm), strict=True))
+        s = self
+        tubes = {}
+        for tube in ("catheter", "wire"):
+            od, idia = s[f"{tube}_outer_diameter"], s[f"{tube}_inner_diameter"]
+            e = s[f"{tube}_youngs_modulus"]
+            tubes[tube] = {
+                "EI": e * second_moment_of_area(od, idia),
+                "GJ": shear_modulus(e, s[f"{tube}_poisson_ratio"]) * polar_moment_of_area(od, idia),
+                "weight_per_length": s[f"{tube}_density"] * np.pi / 4 * (od**2 - idia**2),
+            }
+        self.bending_rigidity = tubes["catheter"]["EI"] + tubes["wire"]["EI"]
+        # Ring 1 (distal, theta1) is turned by the wire, ring 2 (proximal) by the catheter.
+        self.torsional_rigidity = ca.vertcat(tubes["wire"]["GJ"], tubes["catheter"]["GJ"])
+        self.rod_mass_per_length = (
+            tubes["catheter"]["weight_per_length"] + tubes["wire"]["weight_per_length"]
+        )
+        od, idia, h = s["ring_outer_diameter"], s["ring_inner_diameter"], s["ring_length"]
+        self.ring_moment = ring_moment(od, idia, h, s["ring_remanence"])
+        self.ring_mass = s["ring_density"] * ring_volume(od, idia, h)
+        self.ring_spacing = h + s["ring_gap"]
+        axis = ca.vertcat(s["external_axis_x"], s["external_axis_y"], s["external_axis_z"])
+        self.external_axis = axis / ca.norm_2(axis)
+        self.external_center = ca.vertcat(
+            s["external_center_x"], s["external_center_y"], s["external_center_z"]
+        )
+        self.external_moment = self.external_axis * cylinder_moment(
+            s["external_diameter"], s["external_length"], s["external_remanence"]
+        )
+        self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
 
 
 @dataclass(frozen=True)
 class RingPairModel:
     """The model with a set of effects switched on (empty: the baseline).
 
-    Attributes built once: ``residual`` (q, theta, params) -> (r, dr/dq, H) where H is the
-    tangent stiffness K - dQ/dq (its symmetric part positive definite <=> stable);
-    ``pose`` (q, params) -> (position, frame); ``wrench`` (q, theta, params) -> (f, tau).
-    ``theta`` are the ring angles at the tip (theta1 distal, theta2 proximal) [rad].
+    Built once, as CasADi functions:
+    ``residual`` (x, command, params) -> (r, dr/dx): r = 0 at equilibrium, in m or rad;
+    ``stability`` (x, command, params) -> indicator, all entries > 0 iff stable;
+    ``pose`` (x, command, params) -> (position (3), frame (3x3), tip angles (2));
+    ``initial`` (command, params) -> x0, the straight robot with tip angles = command.
+    ``command`` are the ring angles set at the base (theta1 distal, theta2 proximal) [rad].
     """
 
     effects: frozenset[str] = frozenset()
-    parameter_names: tuple[str, ...] = BASELINE
+    n_unknowns: int = field(init=False)
     residual: ca.Function = field(init=False, repr=False, compare=False)
+    stability: ca.Function = field(init=False, repr=False, compare=False)
     pose: ca.Function = field(init=False, repr=False, compare=False)
-    wrench: ca.Function = field(init=False, repr=False, compare=False)
+    initial: ca.Function = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        unknown = set(self.effects) - set(EFFECTS)
+        effects = frozenset(self.effects)
+        object.__setattr__(self, "effects", effects)
+        unknown = effects - set(EFFECTS)
         if unknown:
             raise ValueError(
                 f"unknown model effect(s) {sorted(unknown)}; expected any of {list(EFFECTS)}"
             )
-        if self.effects:
-            raise NotImplementedError(
-                f"effects {sorted(self.effects)} are not implemented yet; only the baseline is"
-            )
-        q = ca.SX.sym("q", N_COORDINATES)
-        theta = ca.SX.sym("theta", 2)
-        prm = ca.SX.sym("params", len(self.parameter_names))
-        s = dict(zip(self.parameter_names, ca.vertsplit(prm), strict=True))
-        ext_moment = ca.vertcat(
-            s["external_moment_x"], s["external_moment_y"], s["external_moment_z"]
-        )
-        ext_center = ca.vertcat(
-            s["external_center_x"], s["external_center_y"], s["external_center_z"]
-        )
+        if "large_deflection" in effects:
+            raise NotImplementedError("large_deflection is not wired into the model yet")
+        n_rod = 4
+        n = n_rod + (2 if "torsion" in effects else 0)
+        object.__setattr__(self, "n_unknowns", n)
+
+        x = ca.SX.sym("x", n)
+        command = ca.SX.sym("command", 2)
+        prm = ca.SX.sym("params", len(NAMES))
+        s = Symbols(prm)
+        load = s["load_scale"]
+        length, ei = s["free_length"], s.bending_rigidity
 
         def field_model(p: ca.SX) -> tuple[ca.SX, ca.SX]:
-            offset = p - ext_center
-            return dipole_field(offset, ext_moment), dipole_field_gradient(offset, ext_moment)
+            offset = p - s.external_center
+            if "near_field" in effects:
+                from design.cylinder_field import cylinder_field
 
-        length, ei = s["free_length"], s["bending_rigidity"]
+                return cylinder_field(
+                    offset,
+                    s.external_axis,
+                    s["external_diameter"] / 2,
+                    s["external_length"],
+                    s["external_remanence"],
+                )
+            return dipole_field(offset, s.external_moment), dipole_field_gradient(
+                offset, s.external_moment
+            )
+
+        q = x[:n_rod]
         position, frame = cantilever.tip_pose(q, length)
-        force, torque = tip_wrench(
-            field_model, position, frame, theta, s["ring_moment"], s["ring_spacing"]
+        tangent = frame[:, 0]
+        angles = x[n_rod : n_rod + 2] if "torsion" in effects else command
+        moment = load * s.ring_moment
+        force, torque = tip_wrench(field_model, position, frame, angles, moment, s.ring_spacing)
+
+        distributed = ca.SX.zeros(3)
+        if "gravity" in effects:
+            g = load * s.gravity
+            ring_weight = s.ring_mass * g
+            force = force + 2 * ring_weight + s["tip_mass"] * g
+            torque = torque + s.ring_spacing * ca.cross(tangent, ring_weight)  # distal ring
+            distributed = s.rod_mass_per_length * g
+
+        bending = cantilever.bending_load(force, torque, tangent)
+        r_rod = (
+            q
+            - cantilever.compliance(length, ei) @ bending
+            - cantilever.distributed_load_response(distributed, length, ei)
         )
-        load = cantilever.bending_load(force, torque, frame[:, 0])
-        r = q - cantilever.compliance(length, ei) @ load
-        dload = ca.jacobian(load, q)
-        tangent_stiffness = cantilever.stiffness(length, ei) - dload
+        stiffness = [cantilever.stiffness(length, ei)]
+        residual = [r_rod]
+        if "torsion" in effects:
+            axial = self._axial_torques(field_model, position, frame, angles, moment, s, load)
+            residual.append(angles - command - axial * length / s.torsional_rigidity)
+            stiffness.append(ca.diag(s.torsional_rigidity / length))
+        r = ca.vertcat(*residual)
+        jac = ca.jacobian(r, x)
+        # Stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the total
+        # potential for these conservative loads; its symmetric part positive definite
+        # (Sylvester's criterion after a diagonal congruence scaling) means stable.
+        h = ca.diagcat(*stiffness) @ jac
+        hs = 0.5 * (h + h.T)
+        scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
+        hn = hs * (scale @ scale.T)
+        minors = ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
+
+        x0 = ca.vertcat(ca.SX.zeros(n_rod), command) if "torsion" in effects else ca.SX.zeros(n_rod)
+        io = ["x", "command", "params"]
+        opts = {"cse": True}
         object.__setattr__(
             self,
             "residual",
-            ca.Function(
-                "residual",
-                [q, theta, prm],
-                [r, ca.jacobian(r, q), tangent_stiffness],
-                ["q", "theta", "params"],
-                ["r", "dr_dq", "H"],
-            ),
+            ca.Function("residual", [x, command, prm], [r, jac], io, ["r", "dr_dx"], opts),
+        )
+        object.__setattr__(
+            self,
+            "stability",
+            ca.Function("stability", [x, command, prm], [minors], io, ["minors"], opts),
         )
         object.__setattr__(
             self,
             "pose",
             ca.Function(
-                "pose", [q, prm], [position, frame], ["q", "params"], ["position", "frame"]
+                "pose",
+                [x, command, prm],
+                [position, frame, angles],
+                io,
+                ["position", "frame", "tip_angles"],
+                opts,
             ),
         )
         object.__setattr__(
             self,
-            "wrench",
-            ca.Function(
-                "wrench",
-                [q, theta, prm],
-                [force, torque],
-                ["q", "theta", "params"],
-                ["force", "torque"],
-            ),
+            "initial",
+            ca.Function("initial", [command, prm], [x0], ["command", "params"], ["x0"], opts),
         )
 
-    def parameters(self, design: Design) -> np.ndarray:
-        """Parameter vector of ``design`` for this model, shape (n,). [SI]"""
-        return parameter_vector(design, self.parameter_names)
+    @staticmethod
+    def _axial_torques(field_model, position, frame, angles, moment, s, load) -> ca.SX:
+        """Torque on each ring about the tip tangent: external field plus the other ring.
+        [N m], shape (2,) (distal, proximal)."""
+        from design.ring_coupling import coupling_coefficient, coupling_torques
+        from design.wrench import magnet_torque, ring_moment_vector
+
+        tangent = frame[:, 0]
+        out = []
+        for i, p in enumerate((position + s.ring_spacing * tangent, position)):
+            m_i = ring_moment_vector(angles[i], frame, moment)
+            out.append(ca.dot(tangent, magnet_torque(field_model(p)[0], m_i)))
+        k12 = load**2 * coupling_coefficient(
+            s["ring_outer_diameter"],
+            s["ring_inner_diameter"],
+            s["ring_length"],
+            s.ring_spacing,
+            s["ring_remanence"],
+        )
+        t1, t2 = coupling_torques(angles[0], angles[1], k12)
+        return ca.vertcat(out[0] + t1, out[1] + t2)
+
+    @property
+    def name(self) -> str:
+        """'baseline' or the sorted effect names joined by '+'."""
+        return "+".join(sorted(self.effects)) or "baseline"
+
+    @staticmethod
+    def parameters(design: Design) -> np.ndarray:
+        """Parameter vector of ``design``, shape (n,). [SI]"""
+        return parameter_vector(design)

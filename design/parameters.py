@@ -1,7 +1,9 @@
 """The model's numeric parameters: names, units and how each follows from a design.
 
-A model takes one flat parameter vector; this table fixes its entries so that simulation,
-calibration and NLPs address the same quantities by name. SI units throughout.
+Every model takes one flat vector of the design's physical inputs (sizes, moduli,
+remanences, positions, friction), in SI, in the order of ``NAMES``. Derived quantities
+(rigidities, moments, spacing) are formulas on these symbols inside the model, so NLPs
+and calibration can free any physical input and get exact derivatives through the model.
 """
 
 from __future__ import annotations
@@ -11,14 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from design.magnets import cylinder_moment, ring_moment
 from design.params import Design
-from design.sections import bending_rigidity
 
 
 @dataclass(frozen=True)
 class Parameter:
-    """One scalar model parameter. ``value`` reads it off a design. [unit as given]"""
+    """One scalar model input. ``value`` reads it off a design. [unit as given]"""
 
     name: str
     unit: str
@@ -26,61 +26,87 @@ class Parameter:
     value: Callable[[Design], float]
 
 
-def _ring_moment(d: Design) -> float:
-    t = d.tip
-    return ring_moment(
-        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.remanence
-    )
+def _vector(prefix: str, unit: str, meaning: str, get: Callable[[Design], tuple]) -> list:
+    return [
+        Parameter(f"{prefix}_{a}", unit, f"{meaning}, {a}", lambda d, i=i: float(get(d)[i]))
+        for i, a in enumerate("xyz")
+    ]
 
 
-def _external_moment(i: int) -> Callable[[Design], float]:
-    def value(d: Design) -> float:
-        e = d.external_magnet
-        return cylinder_moment(e.diameter, e.length, e.remanence) * e.magnetization[i]
-
-    return value
+def _gravity(d: Design) -> tuple[float, float, float]:
+    return d.environment.gravity or (0.0, 0.0, 0.0)
 
 
-def _external_center(i: int) -> Callable[[Design], float]:
-    return lambda d: d.external_magnet.center[i]
-
-
-PARAMETERS: dict[str, Parameter] = {
-    p.name: p
-    for p in (
+_TABLE: list[Parameter] = [
+    Parameter(
+        "free_length", "m", "clamped base to proximal ring centre", lambda d: d.robot.free_length
+    ),
+    *[
         Parameter(
-            "free_length",
-            "m",
-            "clamped base to proximal ring centre",
-            lambda d: d.robot.free_length,
-        ),
-        Parameter(
-            "bending_rigidity",
-            "N m^2",
-            "EI of catheter plus wire",
-            lambda d: bending_rigidity(d.robot),
-        ),
-        Parameter("ring_moment", "A m^2", "moment magnitude of each tip ring", _ring_moment),
-        Parameter("ring_spacing", "m", "centre spacing of the rings", lambda d: d.tip.spacing),
-        *(
-            Parameter(
-                f"external_moment_{a}", "A m^2", f"external dipole moment, {a}", _external_moment(i)
-            )
-            for i, a in enumerate("xyz")
-        ),
-        *(
-            Parameter(
-                f"external_center_{a}", "m", f"external magnet centre, {a}", _external_center(i)
-            )
-            for i, a in enumerate("xyz")
-        ),
-    )
-}
+            f"{tube}_{field}",
+            unit,
+            f"{tube} {field.replace('_', ' ')}",
+            lambda d, tube=tube, field=field: getattr(getattr(d.robot, tube), field),
+        )
+        for tube in ("catheter", "wire")
+        for field, unit in (
+            ("outer_diameter", "m"),
+            ("inner_diameter", "m"),
+            ("youngs_modulus", "Pa"),
+            ("poisson_ratio", "-"),
+            ("density", "kg/m^3"),
+            ("friction_angle", "rad"),
+        )
+    ],
+    Parameter(
+        "ring_outer_diameter", "m", "ring outer diameter", lambda d: d.tip.magnet_outer_diameter
+    ),
+    Parameter(
+        "ring_inner_diameter", "m", "ring inner diameter", lambda d: d.tip.magnet_inner_diameter
+    ),
+    Parameter("ring_length", "m", "ring length", lambda d: d.tip.magnet_length),
+    Parameter("ring_remanence", "T", "ring remanence", lambda d: d.tip.remanence),
+    Parameter("ring_gap", "m", "face-to-face gap of the rings", lambda d: d.tip.gap),
+    Parameter("ring_density", "kg/m^3", "ring density", lambda d: d.tip.density),
+    Parameter("tip_mass", "kg", "extra mass at the tip (mounting pieces)", lambda d: d.tip.mass),
+    Parameter(
+        "external_diameter", "m", "external cylinder diameter", lambda d: d.external_magnet.diameter
+    ),
+    Parameter(
+        "external_length", "m", "external cylinder length", lambda d: d.external_magnet.length
+    ),
+    Parameter(
+        "external_remanence",
+        "T",
+        "external magnet remanence",
+        lambda d: d.external_magnet.remanence,
+    ),
+    *_vector("external_center", "m", "external magnet centre", lambda d: d.external_magnet.center),
+    *_vector(
+        "external_axis",
+        "-",
+        "external magnetisation direction",
+        lambda d: d.external_magnet.magnetization,
+    ),
+    *_vector("gravity", "m/s^2", "acceleration of gravity", _gravity),
+    Parameter(
+        "load_scale", "-", "multiplies every load (1 = physical; continuation)", lambda d: 1.0
+    ),
+]
 
-BASELINE = tuple(PARAMETERS)
-"""Parameter names of the baseline model, in vector order."""
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in _TABLE}
+NAMES: tuple[str, ...] = tuple(PARAMETERS)
+"""Parameter names in vector order."""
 
 
-def parameter_vector(design: Design, names: tuple[str, ...] = BASELINE) -> np.ndarray:
-    """Numeric parameter vector of ``design`` in the order of ``names``, shape (n,). [SI]"""
-    return np.array([PARAMETERS[n].value(design) for n in names], dtype=float)
+def parameter_vector(design: Design) -> np.ndarray:
+    """Numeric parameter vector of ``design`` in the order of ``NAMES``, shape (n,). [SI]"""
+    return np.array([PARAMETERS[n].value(design) for n in NAMES], dtype=float)
+
+
+def index(name: str) -> int:
+    """Position of a parameter in the vector; KeyError names the valid ones."""
+    try:
+        return NAMES.index(name)
+    except ValueError:
+        raise KeyError(f"unknown model parameter {name!r}; expected one of {NAMES}") from None

@@ -20,6 +20,8 @@ class Tube:
     youngs_modulus : Young's modulus in bending. [Pa]
     poisson_ratio : Poisson's ratio; shear modulus is E / (2 (1 + nu)). [-]
     density : Mass density. [kg/m^3]
+    friction_angle : Half-width of the transmission's backlash/friction play: the tip angle
+        trails the command by this much in the direction of travel. [rad]
     """
 
     outer_diameter: float
@@ -27,6 +29,7 @@ class Tube:
     youngs_modulus: float
     poisson_ratio: float
     density: float
+    friction_angle: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,7 @@ class Tip:
     remanence : Remanent flux density of the ring material. [T]
     gap : Face-to-face gap; centre spacing is magnet_length + gap. [m]
     density : Magnet mass density. [kg/m^3]
+    mass : Extra mass carried at the tip (mounting pieces, glue). [kg]
     """
 
     magnet_outer_diameter: float
@@ -57,6 +61,7 @@ class Tip:
     remanence: float
     gap: float
     density: float
+    mass: float = 0.0
 
     @property
     def spacing(self) -> float:

@@ -113,7 +113,7 @@ def workspace_metrics(
     dist = np.linalg.norm(reach, axis=1)
     # Ties (an axisymmetric set-up) resolve to the first grid configuration, not to noise.
     i = int(np.flatnonzero(dist >= dist.max() * (1 - 1e-9))[0])
-    stable_theta = grid.theta[grid.stable]
+    stable_theta = grid.command[grid.stable]
     outer_ok = parallel.stable
     outer = (parallel.position[outer_ok] - rest_position)[:, 1:]
     disc = 0.0

@@ -220,7 +220,7 @@ def workspace(design: Path | None, out: Path | None, step: float) -> None:
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0)
     rest = ws.rest_position
-    commanded = np.rad2deg(ws.grid.theta)
+    commanded = np.rad2deg(ws.grid.command)
     write_csv(
         out / "workspace.csv",
         pose_rows(ws.grid, commanded, rest),

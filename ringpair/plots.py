@@ -117,13 +117,13 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     and the parallel rings (theta1 = theta2) turned together."""
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     d = (sweep.position - ws.rest_position) * MM
-    t = np.rad2deg(sweep.theta[:, 0])
+    t = np.rad2deg(sweep.command[:, 0])
     ax.plot(t, np.linalg.norm(d, axis=1), "k-", lw=2, label="|deflection|, theta2 = 0")
     ax.plot(t, d[:, 1], "-", color=REACH, label="y, theta2 = 0")
     ax.plot(t, d[:, 2], "-", color=NEUTRAL, label="z, theta2 = 0")
     dp = (ws.parallel.position - ws.rest_position) * MM
     ax.plot(
-        np.rad2deg(ws.parallel.theta[:, 0]),
+        np.rad2deg(ws.parallel.command[:, 0]),
         np.linalg.norm(dp, axis=1),
         "--",
         color=LOOP,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
 import pytest
 import tomli_w
 from bad_designs import BAD_VALUES, edited
@@ -90,3 +91,17 @@ def test_nearly_unit_magnetization_is_normalised(demonstrator_doc):
 
 def test_default_design_is_a_fresh_parse():
     assert default_design() == default_design()
+
+
+def test_optional_friction_and_tip_mass_round_trip(tmp_path, demonstrator_doc):
+    # Keys the project adds to the spec (optional, default 0): transmission play and tip mass.
+    doc = edited(demonstrator_doc, "robot.wire.friction_angle_deg", 3.0)
+    doc = edited(doc, "tip.mass_g", 0.25)
+    d = design_from_dict(doc)
+    assert d.robot.wire.friction_angle == pytest.approx(np.deg2rad(3.0))
+    assert d.tip.mass == pytest.approx(0.25e-3)
+    assert d.robot.catheter.friction_angle == 0.0
+    save_design(d, tmp_path / "d.toml")
+    assert load_design(tmp_path / "d.toml") == d
+    with pytest.raises(DesignError, match="robot.wire.friction_angle_deg"):
+        design_from_dict(edited(doc, "robot.wire.friction_angle_deg", -1.0))

@@ -7,26 +7,57 @@ import pytest
 from scipy.optimize import brentq
 
 import design.equilibrium as equilibrium
+from design.constants import MU0
+from design.designfile import default_design
 from design.dipole import K_DIPOLE
 from design.equilibrium import solve_design, solve_equilibria
+from design.magnets import ring_moment
 from design.model import RingPairModel
-from design.parameters import BASELINE
+from design.parameters import index
+from design.sections import bending_rigidity
 
 MODEL = RingPairModel()
-L, EI, M_RING = 0.15, 3.9e-4, 5.4e-3
+DEMO = default_design()
+L = DEMO.robot.free_length
+EI = bending_rigidity(DEMO.robot)
+M_RING = ring_moment(
+    DEMO.tip.magnet_outer_diameter,
+    DEMO.tip.magnet_inner_diameter,
+    DEMO.tip.magnet_length,
+    DEMO.tip.remanence,
+)
 FAR = 1e5  # [m]: a dipole this far away makes a uniform field (gradient 3 B / FAR)
 
 
 def uniform_field_params(b: float, direction: str) -> np.ndarray:
-    """Parameters whose external dipole gives a uniform field B = b along +x or -y at the tip."""
-    values = dict.fromkeys(BASELINE, 0.0)
-    values.update(free_length=L, bending_rigidity=EI, ring_moment=M_RING, ring_spacing=0.0)
-    moment = b * FAR**3 / (2 * K_DIPOLE)  # on the dipole's axis B = 2 k m / r^3
-    if direction == "+x":  # dipole on the x axis beyond the tip, moment along +x
-        values.update(external_center_x=L + FAR, external_moment_x=moment)
-    else:  # dipole on the y axis at +FAR, moment along -y: B along -y at the tip
-        values.update(external_center_x=L, external_center_y=FAR, external_moment_y=-moment)
-    return np.array([values[n] for n in BASELINE])
+    """Demonstrator parameters with the rings at zero spacing and an external dipole so far
+    away that its field at the tip is uniform, B = b along +x or along -y."""
+    params = MODEL.parameters(DEMO)
+    moment = b * FAR**3 / (2 * K_DIPOLE)  # on a dipole's axis B = 2 k m / r^3
+    size = (moment * MU0 * 4 / np.pi) ** (1 / 3)  # a cylinder with B_r = 1 T, D = length
+    values = {
+        "ring_gap": -DEMO.tip.magnet_length,  # centre spacing 0
+        "external_remanence": 1.0,
+        "external_diameter": size,
+        "external_length": size,
+    }
+    if direction == "+x":  # on the x axis beyond the tip, magnetised along +x
+        values |= {
+            "external_center_x": L + FAR,
+            "external_center_y": 0.0,
+            "external_axis_x": 1.0,
+            "external_axis_y": 0.0,
+        }
+    else:  # on the y axis at +FAR, magnetised along -y: B along -y at the tip
+        values |= {
+            "external_center_x": L,
+            "external_center_y": FAR,
+            "external_axis_x": 0.0,
+            "external_axis_y": -1.0,
+        }
+    for name, value in values.items():
+        params[index(name)] = value
+    return params
 
 
 def test_tip_moment_in_uniform_field_matches_closed_form():
@@ -38,7 +69,7 @@ def test_tip_moment_in_uniform_field_matches_closed_form():
         eq = solve_equilibria(MODEL, uniform_field_params(b, "+x"), 0.0, 0.0)
         psi = brentq(lambda x, lam=lam: x - lam * np.cos(x), 0, np.pi / 2)
         assert eq.converged[0] and eq.stable[0]
-        assert -eq.coordinates[0, 3] == pytest.approx(psi, rel=1e-5)
+        assert -eq.unknowns[0, 3] == pytest.approx(psi, rel=1e-5)
         moment = 2 * M_RING * b * np.cos(psi)
         assert -eq.position[0, 1] == pytest.approx(L**2 / (2 * EI) * moment, rel=1e-5)
         tangent = eq.tangent[0]
@@ -62,7 +93,7 @@ def test_antialigned_rings_lose_stability_at_2mB_equal_EI_over_L():
     assert above.converged[0] and not above.stable[0]
     assert aligned.converged[0] and aligned.stable[0]
     # Still next to the straight state (the far dipole's tiny gradient nudges it).
-    assert np.abs(above.coordinates[0]).max() < 1e-3
+    assert np.abs(above.unknowns[0]).max() < 1e-3
 
 
 def test_unconverged_configurations_are_flagged_and_never_numbers(demonstrator, monkeypatch):
