@@ -20,6 +20,7 @@ from design.atomic import write_text
 from design.designfile import DesignError, default_design, load_design, save_design
 from design.equilibrium import solve_design
 from design.magnets import cylinder_moment, ring_moment
+from design.model import EFFECTS, RingPairModel, parse_effects
 from design.params import Design
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import Workspace, sweep_workspace
@@ -50,6 +51,23 @@ def _design(path: Path | None) -> Design:
         return load_design(path)
     except DesignError as exc:
         raise UserError(str(exc)) from None
+
+
+def _model(effects: str) -> RingPairModel:
+    try:
+        return RingPairModel(parse_effects(effects))
+    except ValueError as exc:
+        raise UserError(f"--effects: {exc}") from None
+
+
+EFFECTS_OPTION = click.option(
+    "--effects",
+    default="none",
+    show_default=True,
+    help="Model effects on top of the paper's baseline: 'none', 'all' or a comma list of "
+    + ", ".join(EFFECTS)
+    + " (see the README for what each adds and costs).",
+)
 
 
 def _angles(text: str, option: str) -> np.ndarray:
@@ -132,8 +150,24 @@ def show(design: Path | None, save: Path | None) -> None:
     default=None,
     help="CSV to write. Default: outputs/<design name>/simulate.csv.",
 )
+@EFFECTS_OPTION
+@click.option(
+    "--ordered",
+    is_flag=True,
+    help="Drive the rings through the configurations in the listed order (theta2 varying "
+    "fastest), each state starting from the previous one: needed for hysteresis and to see "
+    "snap-through. Default: each configuration from the straight robot.",
+)
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
-def simulate(design: Path | None, theta1: str, theta2: str, out: Path | None, quiet: bool) -> None:
+def simulate(
+    design: Path | None,
+    theta1: str,
+    theta2: str,
+    out: Path | None,
+    effects: str,
+    ordered: bool,
+    quiet: bool,
+) -> None:
     """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
 
     CSV columns: theta1_deg, theta2_deg, x_mm, y_mm, z_mm (tip, base frame), the tip
@@ -141,20 +175,23 @@ def simulate(design: Path | None, theta1: str, theta2: str, out: Path | None, qu
     whose equilibrium did not converge have empty pose cells and converged = false.
     """
     d = _design(design)
+    model = _model(effects)
     t1 = _angles(theta1, "--theta1")
     t2 = _angles(theta2, "--theta2")
     g1, g2 = np.meshgrid(t1, t2, indexing="ij")
     commanded = np.column_stack([g1.ravel(), g2.ravel()])
     with console.status("solving equilibria (the first run on a machine compiles the model)"):
-        eq = solve_design(d, np.deg2rad(commanded[:, 0]), np.deg2rad(commanded[:, 1]))
+        eq = solve_design(
+            d, np.deg2rad(commanded[:, 0]), np.deg2rad(commanded[:, 1]), model, ordered
+        )
     rest = np.array([d.robot.free_length, 0.0, 0.0])
-    rows = pose_rows(eq, commanded, rest)
+    rows = pose_rows(eq, rest)
     out = out or Path("outputs") / d.name / "simulate.csv"
     write_csv(
-        out, rows, POSE_COLUMNS, header=f"ringpair simulate, design '{d.name}', baseline model"
+        out, rows, POSE_COLUMNS, header=f"ringpair simulate, design '{d.name}', model {model.name}"
     )
     if not quiet:
-        table = Table(title=f"{d.name}: tip poses (baseline model)")
+        table = Table(title=f"{d.name}: tip poses ({model.name} model)")
         for col in (
             "theta1 [deg]",
             "theta2 [deg]",
@@ -202,7 +239,8 @@ def simulate(design: Path | None, theta1: str, theta2: str, out: Path | None, qu
     show_default=True,
     help="Grid spacing of theta1 and theta2 over a full turn [deg].",
 )
-def workspace(design: Path | None, out: Path | None, step: float) -> None:
+@EFFECTS_OPTION
+def workspace(design: Path | None, out: Path | None, step: float, effects: str) -> None:
     """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
 
     Prints the deflection range along y and z, the largest deflection and its direction,
@@ -212,22 +250,22 @@ def workspace(design: Path | None, out: Path | None, step: float) -> None:
     deflection.png (deflection against theta1 with theta2 = 0).
     """
     d = _design(design)
+    model = _model(effects)
     out = out or Path("outputs") / d.name / "workspace"
     from ringpair.plots import write_workspace_plots  # matplotlib only when plotting
 
     with console.status("sweeping the workspace"):
-        ws = sweep_workspace(d, np.deg2rad(step))
+        ws = sweep_workspace(d, np.deg2rad(step), model)
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
-        sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0)
+        sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
     rest = ws.rest_position
-    commanded = np.rad2deg(ws.grid.command)
     write_csv(
         out / "workspace.csv",
-        pose_rows(ws.grid, commanded, rest),
+        pose_rows(ws.grid, rest),
         POSE_COLUMNS,
-        header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg",
+        header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
     )
-    summary = workspace_summary(ws, d, step)
+    summary = workspace_summary(ws, d, step, model.name)
     write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     pictures = write_workspace_plots(ws, sweep, d, out)
     _print_summary(summary)
@@ -236,12 +274,12 @@ def workspace(design: Path | None, out: Path | None, step: float) -> None:
     )
 
 
-def workspace_summary(ws: Workspace, design: Design, step_deg: float) -> dict:
+def workspace_summary(ws: Workspace, design: Design, step_deg: float, model: str) -> dict:
     """The workspace metrics in file units (mm, deg)."""
     direction = ws.max_direction
     return {
         "design": design.name,
-        "model": "baseline",
+        "model": model,
         "grid_step_deg": step_deg,
         "configurations": len(ws.grid),
         "unconverged": ws.n_unconverged,

@@ -14,6 +14,8 @@ from design.equilibrium import Equilibria
 POSE_COLUMNS = (
     "theta1_deg",
     "theta2_deg",
+    "theta1_tip_deg",
+    "theta2_tip_deg",
     "x_mm",
     "y_mm",
     "z_mm",
@@ -23,12 +25,16 @@ POSE_COLUMNS = (
     "deflection_mm",
     "converged",
     "stable",
+    "snapped",
 )
 
 
-def pose_rows(eq: Equilibria, commanded_deg: np.ndarray, rest: np.ndarray) -> list[dict]:
-    """One row per configuration: commanded angles [deg], tip [mm], tangent, flags."""
+def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
+    """One row per configuration: commanded and tip ring angles [deg], tip [mm], tangent,
+    deflection from ``rest`` [mm], flags."""
     rows = []
+    commanded_deg = np.rad2deg(eq.command)
+    tip_deg = np.rad2deg(eq.tip_angles)
     deflection = np.linalg.norm(eq.position - rest, axis=1) * 1e3
     for k in range(len(eq)):
         p, t = eq.position[k] * 1e3, eq.tangent[k]
@@ -36,6 +42,8 @@ def pose_rows(eq: Equilibria, commanded_deg: np.ndarray, rest: np.ndarray) -> li
             {
                 "theta1_deg": float(commanded_deg[k, 0]),
                 "theta2_deg": float(commanded_deg[k, 1]),
+                "theta1_tip_deg": tip_deg[k, 0],
+                "theta2_tip_deg": tip_deg[k, 1],
                 "x_mm": p[0],
                 "y_mm": p[1],
                 "z_mm": p[2],
@@ -45,6 +53,7 @@ def pose_rows(eq: Equilibria, commanded_deg: np.ndarray, rest: np.ndarray) -> li
                 "deflection_mm": deflection[k],
                 "converged": bool(eq.converged[k]),
                 "stable": bool(eq.stable[k]),
+                "snapped": bool(eq.snapped[k]),
             }
         )
     return rows

@@ -129,3 +129,18 @@ def test_bracketed_section_names_survive_the_terminal(tmp_path, demonstrator_doc
     path.write_text(tomli_w.dumps(demonstrator_doc))
     result = CliRunner().invoke(cli, ["show", str(path)])
     assert result.exit_code == 2 and "missing section [robot.wire]" in result.output
+
+
+def test_simulate_with_effects_and_an_ordered_path(tmp_path):
+    out = tmp_path / "g.csv"
+    result = run("simulate", "--effects", "gravity,hysteresis", "--ordered", "--theta1",
+                 "0:60:30", "--out", str(out), "--quiet")
+    assert result.exit_code == 0, result.output
+    rows = read_csv(out)
+    assert [r["snapped"] for r in rows] == ["false"] * 3
+    assert float(rows[1]["theta1_tip_deg"]) == pytest.approx(30.0)  # no play in the demonstrator
+
+
+def test_unknown_effect_exits_2_naming_the_option():
+    result = CliRunner().invoke(cli, ["simulate", "--effects", "torsion,twist"])
+    assert result.exit_code == 2 and "--effects" in result.output and "'twist'" in result.output
