@@ -45,6 +45,7 @@ def main() -> None:
     q_loop = np.empty((len(sub), 4))
     t0 = time.perf_counter()
     for k, th in enumerate(sub):
+
         def fun(q, th=th):
             return np.asarray(residual(q, th, params)[0]).ravel()
 
@@ -58,10 +59,14 @@ def main() -> None:
     rate_batch = args.n / t_batch
     rate_loop = len(sub) / t_loop
     print(f"configurations: {args.n} (demonstrator, random ring angles)")
-    print(f"ringpair batch Newton : {rate_batch:12,.0f} configurations/s "
-          f"({t_batch:.3f} s; converged {eq.converged.mean():.1%}, stable {eq.stable.mean():.1%})")
-    print(f"fsolve loop (baseline): {rate_loop:12,.0f} configurations/s "
-          f"({t_loop:.3f} s for {len(sub)}, scaled: {args.n / rate_loop:.1f} s)")
+    print(
+        f"ringpair batch Newton : {rate_batch:12,.0f} configurations/s "
+        f"({t_batch:.3f} s; converged {eq.converged.mean():.1%}, stable {eq.stable.mean():.1%})"
+    )
+    print(
+        f"fsolve loop (baseline): {rate_loop:12,.0f} configurations/s "
+        f"({t_loop:.3f} s for {len(sub)}, scaled: {args.n / rate_loop:.1f} s)"
+    )
     print(f"ratio                 : {rate_batch / rate_loop:12,.0f} x")
     print(f"largest difference in q between the two: {agree:.2e} (m or rad)")
 

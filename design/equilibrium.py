@@ -37,7 +37,7 @@ SUBSTEP = np.deg2rad(1.0)
 SNAP_LAG_JUMP = 0.1
 """A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
 jump to another branch of equilibria (snap-through). [rad]"""
-INLINE_LIMIT = 20000
+INLINE_LIMIT = 4000
 """Residuals cheaper than this many operations are inlined into the unrolled Newton steps;
 costlier ones are called (smaller C code, faster compilation)."""
 

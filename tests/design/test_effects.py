@@ -44,12 +44,13 @@ def test_self_weight_deflection_is_w_L4_over_8EI():
     # Gere & Goodno, App. G case 1: uniform load w on a cantilever, tip deflection
     # w L^4 / (8 EI), tip slope w L^3 / (6 EI). Magnets and tip mass weightless and unmagnetised.
     model = RingPairModel(frozenset({"gravity"}))
-    params = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0,
-                        ring_density=0.0)
+    params = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0, ring_density=0.0)
     eq = solve_equilibria(model, params, 0.0, 0.0)
     c, w = DEMO.robot.catheter, DEMO.robot.wire
-    weight = 9.81 * (c.density * np.pi / 4 * (c.outer_diameter**2 - c.inner_diameter**2)
-                     + w.density * np.pi / 4 * w.outer_diameter**2)
+    weight = 9.81 * (
+        c.density * np.pi / 4 * (c.outer_diameter**2 - c.inner_diameter**2)
+        + w.density * np.pi / 4 * w.outer_diameter**2
+    )
     assert -eq.position[0, 2] == pytest.approx(weight * L**4 / (8 * EI), rel=1e-12)
     slope = -eq.tangent[0, 2] / eq.tangent[0, 0]
     assert np.arctan(slope) == pytest.approx(weight * L**3 / (6 * EI), rel=1e-12)
@@ -58,8 +59,7 @@ def test_self_weight_deflection_is_w_L4_over_8EI():
 def test_tip_mass_adds_F_L3_over_3EI():
     # Gere & Goodno, App. G case 4: tip force P deflects by P L^3 / (3 EI).
     model = RingPairModel(frozenset({"gravity"}))
-    base = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0,
-                      ring_density=0.0)
+    base = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0, ring_density=0.0)
     heavy = set_params(base, tip_mass=2e-3)
     z0 = solve_equilibria(model, base, 0.0, 0.0).position[0, 2]
     z1 = solve_equilibria(model, heavy, 0.0, 0.0).position[0, 2]
@@ -109,40 +109,52 @@ def test_frictionless_path_is_the_baseline():
 
 
 def test_twist_of_each_transmission_in_a_uniform_transverse_field():
-    # A ring commanded to theta_c in a uniform field B along +y (across the straight robot)
-    # feels the axial torque m B sin(pi/2 - theta) and its transmission twists until
-    # theta - theta_c = L m B cos(theta) / GJ (twist = torque L / GJ). The rings are put
-    # 1 m apart so that their mutual coupling is negligible (~1e-12 of the field's).
+    # A ring commanded to theta_c in a uniform field B along +y (theta = 0, across the
+    # straight robot) feels the axial torque -m B sin(theta) and its transmission twists
+    # until theta - theta_c = -L m B sin(theta) / GJ (twist = torque L / GJ). The rings are
+    # put 1 m apart so that their mutual coupling is negligible (~1e-12 of the field's).
     far = 1e5
-    b = 0.02
+    b = 0.05
     model = RingPairModel(frozenset({"torsion"}))
     from design.constants import MU0
     from design.dipole import K_DIPOLE
 
     moment = b * far**3 / (2 * K_DIPOLE)
     size = (moment * MU0 * 4 / np.pi) ** (1 / 3)
-    params = set_params(model.parameters(DEMO), ring_gap=1.0, external_remanence=1.0,
-                        external_diameter=size, external_length=size, external_center_x=L,
-                        external_center_y=-far, external_axis_x=0.0, external_axis_y=1.0)
-    m_ring = RingPairModel.parameters  # noqa: F841  (documentation: moment from geometry)
+    params = set_params(
+        model.parameters(DEMO),
+        ring_gap=1.0,
+        external_remanence=1.0,
+        external_diameter=size,
+        external_length=size,
+        external_center_x=L,
+        external_center_y=-far,
+        external_axis_x=0.0,
+        external_axis_y=1.0,
+    )
     from design.magnets import ring_moment
 
-    m = ring_moment(DEMO.tip.magnet_outer_diameter, DEMO.tip.magnet_inner_diameter,
-                    DEMO.tip.magnet_length, DEMO.tip.remanence)
+    m = ring_moment(
+        DEMO.tip.magnet_outer_diameter,
+        DEMO.tip.magnet_inner_diameter,
+        DEMO.tip.magnet_length,
+        DEMO.tip.remanence,
+    )
     command = np.deg2rad(30.0)
     eq = solve_equilibria(model, params, command, command)
     assert eq.converged[0] and eq.stable[0]
     for i, tube in enumerate((DEMO.robot.wire, DEMO.robot.catheter)):
         gj = tube_torsional_rigidity(tube)
-        expected = brentq(lambda t, gj=gj: t - command - L * m * b * np.cos(t) / gj,
-                          command, np.pi / 2)
+        expected = brentq(lambda t, gj=gj: t - command + L * m * b * np.sin(t) / gj, 0.0, command)
+        assert expected < command - 0.05  # a real lag, several degrees
         assert eq.tip_angles[0, i] == pytest.approx(expected, rel=1e-6)
 
 
 def test_torsionally_rigid_transmissions_are_the_baseline():
     model = RingPairModel(frozenset({"torsion"}))
-    stiff = set_params(model.parameters(DEMO), wire_poisson_ratio=-1 + 1e-12,
-                       catheter_poisson_ratio=-1 + 1e-12)
+    stiff = set_params(
+        model.parameters(DEMO), wire_poisson_ratio=-1 + 1e-12, catheter_poisson_ratio=-1 + 1e-12
+    )
     a = solve_design(DEMO, THETA, 0.0)
     b = solve_equilibria(model, stiff, THETA, 0.0)
     np.testing.assert_allclose(b.position, a.position, atol=1e-9)
