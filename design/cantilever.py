@@ -85,8 +85,9 @@ def stiffness(free_length: Any, bending_rigidity: Any) -> ca.SX:
     )
 
 
-def distributed_load_response(load_per_length: ca.SX, free_length: Any,
-                              bending_rigidity: Any) -> ca.SX:
+def distributed_load_response(
+    load_per_length: ca.SX, free_length: Any, bending_rigidity: Any
+) -> ca.SX:
     """Coordinates q of the linear cantilever under a uniform load w per unit length, fixed in
     the base frame (self-weight). M(s) = (L - s)^2 / 2 e1 x w integrates to
     delta = L^4 / (8 EI) w_perp and phi = L^3 / (6 EI) e1 x w (Gere & Goodno, App. G case 1).

@@ -68,8 +68,14 @@ def _tube_keys() -> tuple[Key, ...]:
         Key("youngs_modulus_mpa", "Young's modulus [MPa]", MPA, 0.0, None, True),
         Key("poisson_ratio", "Poisson's ratio [-]", 1.0, -1.0, 0.5, True),
         Key("density_kg_m3", "density [kg/m^3]", 1.0, 0.0, None, True),
-        Key("friction_angle_deg", "optional: backlash/friction play of the transmission [deg]",
-            DEG, 0.0, 90.0, default=0.0),
+        Key(
+            "friction_angle_deg",
+            "optional: backlash/friction play of the transmission [deg]",
+            DEG,
+            0.0,
+            90.0,
+            default=0.0,
+        ),
     )
 
 
@@ -172,8 +178,14 @@ def _tube(doc: dict[str, Any], name: str) -> Tube:
             f"{name}.inner_diameter_mm must be smaller than outer_diameter_mm "
             f"({od / MM:g}); got {idia / MM:g}"
         )
-    return Tube(od, idia, s["youngs_modulus_mpa"], s["poisson_ratio"], s["density_kg_m3"],
-                s["friction_angle_deg"])
+    return Tube(
+        od,
+        idia,
+        s["youngs_modulus_mpa"],
+        s["poisson_ratio"],
+        s["density_kg_m3"],
+        s["friction_angle_deg"],
+    )
 
 
 def design_from_dict(doc: dict[str, Any]) -> Design:
