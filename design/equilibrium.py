@@ -37,6 +37,10 @@ SUBSTEP = np.deg2rad(1.0)
 SNAP_LAG_JUMP = 0.1
 """A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
 jump to another branch of equilibria (snap-through). [rad]"""
+SETTLE_ANGLE = 0.05
+"""Perturbation of the tip angles when looking for the state an unstable one falls into. [rad]"""
+SETTLE_RELAXATION = 60
+"""Downhill relaxation steps before Newton when settling from an unstable state."""
 INLINE_LIMIT = 4000
 """Residuals cheaper than this many operations are inlined into the unrolled Newton steps;
 costlier ones are called (smaller C code, faster compilation)."""
@@ -167,6 +171,11 @@ def _solve_columns(
     return outs
 
 
+def _stable(out: list[np.ndarray]) -> bool:
+    """Converged and stable, for one configuration's solver outputs."""
+    return bool(out[1][0] < TOLERANCE and np.all(out[2] > 0))
+
+
 def _equilibria(
     command: np.ndarray, outs: list[np.ndarray], snapped: np.ndarray | None = None
 ) -> Equilibria:
@@ -220,8 +229,10 @@ def solve_sequence(
     sub-steps of at most SUBSTEP, each Newton solve starting from the previous state, so
     the robot stays on its branch. With ``hysteresis`` the commands first pass through each
     transmission's play (:func:`design.friction.play`). Where the branch ends (Newton fails
-    or the state turns unstable) or a ring's lag jumps by more than SNAP_LAG_JUMP, the state
-    is re-solved from scratch and ``snapped`` is set for that command.
+    or the state turns unstable) the robot falls into the nearest stable state (Newton from
+    small perturbations), and where that or a plain step changes a ring's lag by more than
+    SNAP_LAG_JUMP, ``snapped`` is set for that command (the first command too, if the robot
+    cannot start there).
     """
     params = np.asarray(params, float)
     command = _commands(theta1, theta2)
@@ -232,22 +243,55 @@ def solve_sequence(
         )
         effective = play(command, width)
     solver = newton_function(model)
-    first = _solve_columns(model, params, effective[:, :1])
-    columns = [[o[:, 0] for o in first]]
+
+    def solve(x0: np.ndarray, c: np.ndarray) -> list[np.ndarray]:
+        return [np.asarray(o).ravel() for o in solver(x0, c, params)]
+
+    residual = compile_function(model.residual)
+
+    def settle(x: np.ndarray, c: np.ndarray) -> list[np.ndarray] | None:
+        """The stable state a real robot falls into from an unstable or lost one: from small
+        perturbations of x, relax downhill (x <- x - r/2: -r points down the potential for
+        these scaled residuals), then polish by Newton; the nearest stable result."""
+        n_rod = model.n_unknowns - (2 if "torsion" in model.effects else 0)
+        best, best_dist = None, np.inf
+        for i in range(model.n_unknowns):
+            step = SETTLE_ANGLE if i >= n_rod else 0.01 * max(abs(x[i]), 1e-3)
+            for sign in (1.0, -1.0):
+                xr = x.copy()
+                xr[i] += sign * step
+                for _ in range(SETTLE_RELAXATION):
+                    xr = xr - 0.5 * np.asarray(residual(xr, c, params)[0]).ravel()
+                if not np.isfinite(xr).all():
+                    continue
+                out = solve(xr, c)
+                dist = np.abs(out[0] - x).max()
+                if _stable(out) and dist < best_dist:
+                    best, best_dist = out, dist
+        return best
+
+    first = [o[:, 0] for o in _solve_columns(model, params, effective[:, :1])]
     snapped = np.zeros(command.shape[1], bool)
+    if not _stable(first):
+        settled = settle(first[0], effective[:, 0])
+        if settled is not None:
+            first, snapped[0] = settled, True
+    columns = [first]
     for k in range(1, command.shape[1]):
         prev = columns[-1]
         a, b = effective[:, k - 1], effective[:, k]
         n_sub = max(1, int(np.ceil(np.abs(b - a).max() / SUBSTEP)))
         for j in range(1, n_sub + 1):
             c = a + (b - a) * j / n_sub
-            out = [np.asarray(o).ravel() for o in solver(prev[0], c, params)]
+            out = solve(prev[0], c)
             lag_jump = np.abs((out[5] - c) - (prev[5] - (a + (b - a) * (j - 1) / n_sub)))
-            ok = out[1][0] < TOLERANCE and np.all(out[2] > 0)
-            if not ok or lag_jump.max() > SNAP_LAG_JUMP:
+            if not _stable(out) or lag_jump.max() > SNAP_LAG_JUMP:
                 snapped[k] = True
-                if not ok:
-                    out = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
+                if not _stable(out):
+                    settled = settle(out[0] if np.isfinite(out[0]).all() else prev[0], c)
+                    if settled is None:
+                        settled = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
+                    out = settled
             prev = out
         columns.append(prev)
     outs = [np.column_stack([col[i] for col in columns]) for i in range(6)]

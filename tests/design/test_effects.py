@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import brentq
 
 from design.designfile import default_design
-from design.equilibrium import solve_design, solve_equilibria
+from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import EFFECTS, RingPairModel, parse_effects
 from design.parameters import index
 from design.params import Environment
@@ -159,3 +159,41 @@ def test_torsionally_rigid_transmissions_are_the_baseline():
     b = solve_equilibria(model, stiff, THETA, 0.0)
     np.testing.assert_allclose(b.position, a.position, atol=1e-9)
     np.testing.assert_allclose(b.tip_angles, a.command, atol=1e-9)
+
+
+def test_snap_through_of_coupled_rings_at_the_closed_form_fold():
+    # Without an external field only the rings' coupling U = K12 cos(d) acts (d = tip angle
+    # difference). The two transmissions twist in opposite directions, so
+    # d = d_c + kappa sin d with kappa = K12 L (1/GJ_wire + 1/GJ_catheter). For kappa > 1 the
+    # branch d > 0 ends at the fold cos d_f = 1/kappa, d_c,f = d_f - kappa sin d_f < 0: driving
+    # d_c downwards the rings snap there, and on the way back at -d_c,f (hysteresis).
+    from design.ring_coupling import coupling_coefficient
+
+    t = DEMO.tip
+    k12 = coupling_coefficient(
+        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.spacing, t.remanence
+    )
+    kappa = (
+        k12
+        * L
+        * (
+            1 / tube_torsional_rigidity(DEMO.robot.wire)
+            + 1 / tube_torsional_rigidity(DEMO.robot.catheter)
+        )
+    )
+    assert kappa > 1  # the demonstrator's rings cannot be held parallel (kappa ~ 1.9)
+    d_f = np.arccos(1 / kappa)
+    fold = d_f - kappa * np.sin(d_f)
+    model = RingPairModel(frozenset({"torsion"}))
+    params = set_params(model.parameters(DEMO), external_remanence=0.0)
+    down = np.deg2rad(np.arange(60.0, -60.5, -1.0))
+    path = np.r_[down, down[::-1][1:]]
+    eq = solve_sequence(model, params, path, 0.0)
+    assert eq.converged.all() and eq.stable.all()
+    snaps = np.rad2deg(path[eq.snapped])
+    assert len(snaps) == 2
+    assert snaps[0] == pytest.approx(np.rad2deg(fold), abs=1.0)  # going down
+    assert snaps[1] == pytest.approx(-np.rad2deg(fold), abs=1.0)  # coming back
+    d = eq.tip_angles[:, 0] - eq.tip_angles[:, 1]
+    assert np.abs(d).min() > d_f - 0.02  # the rings never pass through parallel
+    np.testing.assert_allclose(d - path, kappa * np.sin(d), atol=1e-9)
