@@ -42,13 +42,21 @@ EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
 """Model extensions by name (spec/formats.md)."""
 
 
+def available_effects() -> tuple[str, ...]:
+    """The effects this version implements (all of EFFECTS once each is wired in)."""
+    return tuple(e for e in EFFECTS if e not in _PENDING)
+
+
+_PENDING = {"large_deflection"}
+
+
 def parse_effects(text: str) -> frozenset[str]:
     """'none', 'all' or a comma list of effect names; ValueError names the bad one."""
     text = text.strip()
     if text in ("", "none", "baseline"):
         return frozenset()
     if text == "all":
-        return frozenset(EFFECTS)
+        return frozenset(available_effects())
     names = [t.strip() for t in text.split(",") if t.strip()]
     bad = [n for n in names if n not in EFFECTS]
     if bad:

@@ -144,3 +144,14 @@ def test_simulate_with_effects_and_an_ordered_path(tmp_path):
 def test_unknown_effect_exits_2_naming_the_option():
     result = CliRunner().invoke(cli, ["simulate", "--effects", "torsion,twist"])
     assert result.exit_code == 2 and "--effects" in result.output and "'twist'" in result.output
+
+
+def test_effects_table_compares_every_available_effect(tmp_path):
+    out = tmp_path / "effects.csv"
+    result = run("effects", "--theta1", "0:24:12", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    rows = {r["effect"]: r for r in read_csv(out)}
+    assert set(rows) == {"near_field", "torsion", "gravity", "hysteresis", "all"}
+    assert float(rows["hysteresis"]["max_shift_mm"]) == 0.0  # the demonstrator has no play
+    assert float(rows["gravity"]["max_shift_mm"]) > 5.0  # it droops by millimetres
+    assert 0.5 < float(rows["near_field"]["max_shift_mm"]) < 5.0
