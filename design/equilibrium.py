@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -82,10 +83,10 @@ def newton_function(model: RingPairModel) -> ca.Function:
     """Compiled single-configuration solver: (x0, command, params) ->
     (x, |r|_inf, stability indicator, position, frame (9, column-major), tip angles)."""
     inline = model.residual.n_instructions() < INLINE_LIMIT
-    sym = ca.SX.sym if inline else ca.MX.sym
-    x0 = sym("x0", model.n_unknowns)
-    command = sym("command", 2)
-    prm = sym("params", model.residual.size1_in(2))
+    sym: Any = ca.SX.sym if inline else ca.MX.sym
+    x0: Any = sym("x0", model.n_unknowns)
+    command: Any = sym("command", 2)
+    prm: Any = sym("params", model.residual.size1_in(2))
     x = x0
     for _ in range(NEWTON_STEPS):
         r, jac = model.residual(x, command, prm)

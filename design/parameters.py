@@ -26,9 +26,17 @@ class Parameter:
     value: Callable[[Design], float]
 
 
+def _component(get: Callable[[Design], tuple], i: int) -> Callable[[Design], float]:
+    return lambda d: float(get(d)[i])
+
+
+def _tube_field(tube: str, name: str) -> Callable[[Design], float]:
+    return lambda d: float(getattr(getattr(d.robot, tube), name))
+
+
 def _vector(prefix: str, unit: str, meaning: str, get: Callable[[Design], tuple]) -> list:
     return [
-        Parameter(f"{prefix}_{a}", unit, f"{meaning}, {a}", lambda d, i=i: float(get(d)[i]))
+        Parameter(f"{prefix}_{a}", unit, f"{meaning}, {a}", _component(get, i))
         for i, a in enumerate("xyz")
     ]
 
@@ -46,7 +54,7 @@ _TABLE: list[Parameter] = [
             f"{tube}_{field}",
             unit,
             f"{tube} {field.replace('_', ' ')}",
-            lambda d, tube=tube, field=field: getattr(getattr(d.robot, tube), field),
+            _tube_field(tube, field),
         )
         for tube in ("catheter", "wire")
         for field, unit in (

@@ -386,7 +386,7 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
         table.add_column(col, justify="right")
     for r in rows:
         table.add_row(
-            r["effect"],
+            str(r["effect"]),
             f"{r['max_shift_mm']:.2f}",
             f"{r['rms_shift_mm']:.2f}",
             f"{r['max_deflection_mm']:.2f}",
