@@ -1,0 +1,254 @@
+"""One entry point: build, export, check and render every part of a design.
+
+``build_parts(design, out_dir, process="fdm")`` writes, into ``out_dir`` (all in mm):
+
+    ringpair_robot.step        STEP assembly, one named node per part instance
+    stl/<part>.stl             one STL per printed part, in its print orientation
+    plate_<process>_<k>.3mf    print plate(s) with every copy of every printed part
+    checks.csv                 the printability and fit table (cad.checks)
+    parts.csv                  parts list: quantity, volume, mass, size
+    cad_summary.json           tracking groove, self-locking and gear numbers, timings
+    renders/...png             each part, assembly, actuator, exploded, tip
+
+and returns a :class:`CadReport` with the same numbers.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from cad.actuator import build_actuator
+from cad.assembly import RobotAssembly, build_assembly
+from cad.checks import (
+    CheckRow,
+    gear_checks,
+    interference_checks,
+    part_checks,
+    place_meshes,
+    rows_as_dicts,
+    write_csv,
+)
+from cad.export import PartMesh, arrange_plates, export_3mf, export_step, export_stl
+from cad.layout import ActuatorSpec
+from cad.meshing import tessellate
+from cad.mounting import MountingSpec, TrackingReport, build_mounting_pieces
+from cad.process import PrintProcess, get_process
+from cad.render import render_all
+from cad.selflocking import SelfLocking
+from design.atomic import write_text
+from design.params import Design
+
+
+@dataclass
+class CadReport:
+    """What :func:`build_parts` made and found.
+
+    out_dir : Where the files are.
+    process : Name of the print process.
+    files : Every file written.
+    checks : The check table, one dict per row (``item, check, value, limit, unit, passed,
+        note``).
+    parts : Parts list, one dict per part (``name, quantity, printed, volume_mm3, mass_g,
+        size_mm, description``).
+    tracking : Groove pitch, travel, resolution [deg/mm] and range [deg] per piece.
+    self_locking : The worm drives' self-locking numbers.
+    drive : Gear numbers (module, teeth, ratio, lead angle, centre distance, ...).
+    timings_s : Seconds per stage (build, export, check, render, total).
+    assembly : The solids themselves (mm), for callers that go on working with them.
+    """
+
+    out_dir: Path
+    process: str
+    files: list[Path] = field(default_factory=list)
+    checks: list[dict[str, object]] = field(default_factory=list)
+    parts: list[dict[str, object]] = field(default_factory=list)
+    tracking: tuple[TrackingReport, ...] = ()
+    self_locking: SelfLocking | None = None
+    drive: dict[str, float] = field(default_factory=dict)
+    timings_s: dict[str, float] = field(default_factory=dict)
+    assembly: RobotAssembly | None = None
+
+    @property
+    def passed(self) -> bool:
+        """True when every check passed."""
+        return all(bool(r["passed"]) for r in self.checks)
+
+    @property
+    def failures(self) -> list[dict[str, object]]:
+        """The rows that did not pass."""
+        return [r for r in self.checks if not r["passed"]]
+
+    def summary(self) -> str:
+        """A few lines for the terminal."""
+        prox = self.tracking[0] if self.tracking else None
+        lines = [
+            f"CAD ({self.process}, mm): {len(self.files)} files in {self.out_dir}",
+            f"checks: {sum(bool(r['passed']) for r in self.checks)}/{len(self.checks)} passed",
+        ]
+        if prox is not None:
+            lines.append(
+                f"tracking groove: {prox.resolution_deg_per_mm:.2f} deg per mm of notch travel, "
+                f"range {prox.range_deg:.1f} deg over {prox.travel_mm:g} mm (pitch "
+                f"{prox.pitch_mm:.2f} mm)"
+            )
+        if self.self_locking is not None:
+            lines.append(f"worm drives: {self.self_locking.summary()}")
+        lines.append("time: " + ", ".join(f"{k} {v:.1f} s" for k, v in self.timings_s.items()))
+        for r in self.failures:
+            lines.append(
+                f"FAILED {r['item']} {r['check']}: {r['value']:.4g} {r['unit']} ({r['note']})"
+            )
+        return "\n".join(lines)
+
+    def to_json(self) -> dict[str, object]:
+        """The report's numbers as plain JSON types (no check rows, no file list)."""
+        return {
+            "process": self.process,
+            "unit": "mm",
+            "tracking": [asdict(t) for t in self.tracking],
+            "self_locking": None
+            if self.self_locking is None
+            else {**asdict(self.self_locking), "self_locking": self.self_locking.self_locking},
+            "drive": self.drive,
+            "timings_s": self.timings_s,
+            "passed": self.passed,
+            "parts": self.parts,
+        }
+
+
+def part_meshes(assembly: RobotAssembly, process: PrintProcess) -> dict[str, PartMesh]:
+    """Tessellate every part once, at the process's export tolerance (print frame). [mm]"""
+    out = {}
+    for name, part in assembly.parts.items():
+        v, t = tessellate(part.solid, process.linear_deflection_mm, process.angular_deflection_rad)
+        out[name] = PartMesh(name, v, t, part.quantity)
+    return out
+
+
+def _parts_table(assembly: RobotAssembly, process: PrintProcess) -> list[dict[str, object]]:
+    rows = []
+    for name, part in assembly.parts.items():
+        bb = part.solid.BoundingBox()
+        volume = part.solid.Volume()
+        rows.append(
+            {
+                "name": name,
+                "quantity": part.quantity,
+                "printed": part.printed,
+                "volume_mm3": round(volume, 3),
+                "mass_g": round(volume * 1e-9 * process.material_density_kg_m3 * 1e3, 4)
+                if part.printed
+                else None,
+                "size_mm": [round(bb.xlen, 3), round(bb.ylen, 3), round(bb.zlen, 3)],
+                "description": part.description,
+            }
+        )
+    return rows
+
+
+def _write_parts_csv(rows: list[dict[str, object]], path: Path) -> Path:
+    buf = io.StringIO()
+    cols = ["name", "quantity", "printed", "volume_mm3", "mass_g", "size_mm", "description"]
+    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({**r, "size_mm": " x ".join(f"{s:g}" for s in r["size_mm"])})  # type: ignore[attr-defined]
+    write_text(path, buf.getvalue())
+    return path
+
+
+def build_parts(
+    design: Design,
+    out_dir: str | Path,
+    process: str | PrintProcess = "fdm",
+    *,
+    mounting: MountingSpec | None = None,
+    actuator: ActuatorSpec | None = None,
+    material_pair: str | None = None,
+    render: bool = True,
+) -> CadReport:
+    """Build, export, check and render every part of ``design``.
+
+    Parameters
+    ----------
+    design : The robot (SI, as loaded from a design file).
+    out_dir : Output directory (created); files in it are replaced atomically.
+    process : ``"fdm"`` or ``"resin"``, or a :class:`~cad.process.PrintProcess`.
+    mounting, actuator : Designer's choices for the tip pieces and the actuator.
+    material_pair : Worm/wheel material pair for the self-locking check.
+    render : Also write the PNG renders.
+
+    Raises :class:`~cad.errors.CadError` (a ValueError) for impossible dimensions.
+    """
+    proc = get_process(process)
+    out = Path(out_dir)
+    report = CadReport(out_dir=out, process=proc.name)
+    t0 = time.perf_counter()
+
+    # All geometry first: impossible dimensions fail here, before anything is written.
+    pieces = build_mounting_pieces(design, proc, mounting)
+    act = build_actuator(design, proc, actuator, material_pair)
+    assembly = build_assembly(design, act, pieces)
+    out.mkdir(parents=True, exist_ok=True)
+    t1 = time.perf_counter()
+
+    meshes = part_meshes(assembly, proc)
+    printed = [m for n, m in meshes.items() if assembly.parts[n].printed]
+    stl_paths = {m.name: export_stl(m, out / "stl" / f"{m.name}.stl") for m in printed}
+    report.files += list(stl_paths.values())
+    report.files.append(export_step(assembly, out / "ringpair_robot.step"))
+    for k, plate in enumerate(arrange_plates(printed, proc), start=1):
+        report.files.append(export_3mf(meshes, plate, out / f"plate_{proc.name}_{k}.3mf"))
+    t2 = time.perf_counter()
+
+    rows: list[CheckRow] = []
+    read_back = {}
+    for name, path in stl_paths.items():
+        part_rows, mesh = part_checks(
+            name, path, assembly.parts[name].solid.Volume(), proc, act.teeth.get(name)
+        )
+        rows += part_rows
+        read_back[name] = mesh
+    for name, m in meshes.items():
+        if name not in read_back:
+            read_back[name] = trimesh.Trimesh(m.vertices, m.triangles, process=True)
+    placed = place_meshes(assembly, read_back)
+    interference = interference_checks(placed)
+    rows += interference
+    rows += gear_checks(assembly, interference)
+    report.checks = rows_as_dicts(rows)
+    report.files.append(write_csv(rows, out / "checks.csv"))
+    report.parts = _parts_table(assembly, proc)
+    report.files.append(_write_parts_csv(report.parts, out / "parts.csv"))
+    t3 = time.perf_counter()
+
+    if render:
+        render_meshes = {
+            n: (np.asarray(m.vertices), np.asarray(m.faces)) for n, m in read_back.items()
+        }
+        report.files += render_all(assembly, out / "renders", render_meshes)
+    t4 = time.perf_counter()
+
+    report.assembly = assembly
+    report.tracking = pieces.tracking()
+    report.self_locking = act.locking
+    report.drive = act.layout.drive.table()
+    report.timings_s = {
+        "build": t1 - t0,
+        "export": t2 - t1,
+        "check": t3 - t2,
+        "render": t4 - t3,
+        "total": t4 - t0,
+    }
+    summary = out / "cad_summary.json"
+    write_text(summary, json.dumps(report.to_json(), indent=2) + "\n")
+    report.files.append(summary)
+    return report
