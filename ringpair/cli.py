@@ -399,6 +399,46 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
     console.print(f"wrote {out}")
 
 
+@cli.command()
+@click.argument("design", required=False, type=click.Path(path_type=Path))
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Directory for the STEP assembly, STL parts, 3MF plates, check tables and renders. "
+    "Default: outputs/<design name>/cad.",
+)
+@click.option(
+    "--process",
+    type=click.Choice(["fdm", "resin"]),
+    default="fdm",
+    show_default=True,
+    help="Printing process: sets fit allowances, clearances, minimum wall and build volume.",
+)
+@click.option("--no-render", is_flag=True, help="Skip the pyvista renders (faster).")
+def cad(design: Path | None, out: Path | None, process: str, no_render: bool) -> None:
+    """Printable parts of DESIGN: the two mounting pieces with the helical tracking groove
+    and the worm-gear actuator, in millimetres.
+
+    Writes ringpair_robot.step (assembly with named parts), stl/<part>.stl, 3MF print
+    plates, checks.csv (watertight, volume, minimum wall, build volume, interference, gear
+    centre distance), parts.csv, cad_summary.json and renders/*.png. Exits 3 if a
+    printability check fails.
+    """
+    d = _design(design)
+    from cad import CadError, build_parts  # CAD libraries only when building parts
+
+    out = out or Path("outputs") / d.name / "cad"
+    try:
+        with console.status("building, exporting, checking and rendering parts"):
+            report = build_parts(d, out, process, render=not no_render)
+    except CadError as exc:
+        raise UserError(str(exc)) from None
+    console.print(report.summary(), highlight=False)
+    if not report.passed:
+        sys.exit(3)
+
+
 def main() -> None:
     """Console-script entry point."""
     try:

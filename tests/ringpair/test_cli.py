@@ -133,8 +133,17 @@ def test_bracketed_section_names_survive_the_terminal(tmp_path, demonstrator_doc
 
 def test_simulate_with_effects_and_an_ordered_path(tmp_path):
     out = tmp_path / "g.csv"
-    result = run("simulate", "--effects", "gravity,hysteresis", "--ordered", "--theta1",
-                 "0:60:30", "--out", str(out), "--quiet")
+    result = run(
+        "simulate",
+        "--effects",
+        "gravity,hysteresis",
+        "--ordered",
+        "--theta1",
+        "0:60:30",
+        "--out",
+        str(out),
+        "--quiet",
+    )
     assert result.exit_code == 0, result.output
     rows = read_csv(out)
     assert [r["snapped"] for r in rows] == ["false"] * 3
@@ -155,3 +164,12 @@ def test_effects_table_compares_every_available_effect(tmp_path):
     assert float(rows["hysteresis"]["max_shift_mm"]) == 0.0  # the demonstrator has no play
     assert float(rows["gravity"]["max_shift_mm"]) > 5.0  # it droops by millimetres
     assert 0.5 < float(rows["near_field"]["max_shift_mm"]) < 5.0
+
+
+def test_cad_writes_checked_parts(tmp_path):
+    out = tmp_path / "cad"
+    result = run("cad", "--out", str(out), "--no-render")
+    assert result.exit_code == 0, result.output
+    assert "128/128 passed" in result.output or "passed" in result.output
+    assert (out / "ringpair_robot.step").stat().st_size > 10_000
+    assert any((out / "stl").glob("*.stl"))
