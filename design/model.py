@@ -82,9 +82,14 @@ class Symbols(dict):
                 "GJ": shear_modulus(e, s[f"{tube}_poisson_ratio"]) * polar_moment_of_area(od, idia),
                 "weight_per_length": s[f"{tube}_density"] * np.pi / 4 * (od**2 - idia**2),
             }
-        self.bending_rigidity = tubes["catheter"]["EI"] + tubes["wire"]["EI"]
+        self.bending_rigidity = s["bending_rigidity_scale"] * (
+            tubes["catheter"]["EI"] + tubes["wire"]["EI"]
+        )
         # Ring 1 (distal, theta1) is turned by the wire, ring 2 (proximal) by the catheter.
-        self.torsional_rigidity = ca.vertcat(tubes["wire"]["GJ"], tubes["catheter"]["GJ"])
+        self.torsional_rigidity = ca.vertcat(
+            s["wire_torsion_scale"] * tubes["wire"]["GJ"],
+            s["catheter_torsion_scale"] * tubes["catheter"]["GJ"],
+        )
         self.rod_mass_per_length = (
             tubes["catheter"]["weight_per_length"] + tubes["wire"]["weight_per_length"]
         )

@@ -41,6 +41,10 @@ def _vector(prefix: str, unit: str, meaning: str, get: Callable[[Design], tuple]
     ]
 
 
+def _one(d: Design) -> float:
+    return 1.0
+
+
 def _gravity(d: Design) -> tuple[float, float, float]:
     return d.environment.gravity or (0.0, 0.0, 0.0)
 
@@ -97,9 +101,15 @@ _TABLE: list[Parameter] = [
         lambda d: d.external_magnet.magnetization,
     ),
     *_vector("gravity", "m/s^2", "acceleration of gravity", _gravity),
-    Parameter(
-        "load_scale", "-", "multiplies every load (1 = physical; continuation)", lambda d: 1.0
-    ),
+    *[
+        Parameter(name, "-", f"calibration factor on the {what} (1 = as designed)", _one)
+        for name, what in (
+            ("bending_rigidity_scale", "bending rigidity EI of catheter + wire"),
+            ("wire_torsion_scale", "torsional rigidity GJ of the wire"),
+            ("catheter_torsion_scale", "torsional rigidity GJ of the catheter"),
+        )
+    ],
+    Parameter("load_scale", "-", "multiplies every load (1 = physical; continuation)", _one),
 ]
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in _TABLE}
