@@ -145,13 +145,29 @@ def _run(
 
 
 def _initial(model: RingPairModel, command: np.ndarray, params: np.ndarray) -> np.ndarray:
-    return np.asarray(model.initial.map(command.shape[1])(command, params))
+    """Newton's start: the straight robot; for the large-deflection rod the prediction from
+    the linear model's equilibrium, and NaN where that did not converge (so that the
+    column goes to load continuation rather than start from a coiled rod)."""
+    x0 = np.asarray(model.initial.map(command.shape[1])(command, params))
+    if model.predictor is None:
+        return x0
+    x_lin, res = _solve_columns(model.linear(), params, command)[:2]
+    good = res[0] < TOLERANCE
+    x0[:] = np.nan
+    if good.any():
+        prm = params if params.ndim == 1 else params[:, good]
+        predict = model.predictor.map(int(good.sum()))
+        x0[:, good] = np.asarray(predict(x_lin[:, good], command[:, good], prm))
+    return x0
 
 
 def _solve_columns(
     model: RingPairModel, params: np.ndarray, command: np.ndarray
 ) -> list[np.ndarray]:
-    """Newton from the straight robot, then load continuation for what did not converge."""
+    """Newton from the straight robot, then load continuation for what did not converge.
+
+    params : shape (n,) shared by all columns, or (n, N) one per column. [SI]
+    """
     outs = list(_run(model, _initial(model, command, params), command, params))
     bad = ~(outs[1][0] < TOLERANCE)
     scale = index("load_scale")
@@ -160,10 +176,13 @@ def _solve_columns(
         if idx.size == 0:
             break
         sub = command[:, idx]
-        prm = np.repeat(params[:, None], idx.size, axis=1)
-        xc = _initial(model, sub, prm)
+        full = params[:, idx] if params.ndim == 2 else np.repeat(params[:, None], idx.size, 1)
+        prm = full.copy()
+        xc = None
         for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            prm[scale] = lam * params[scale]
+            prm[scale] = lam * full[scale]
+            if xc is None:
+                xc = _initial(model, sub, prm)
             out = _run(model, xc, sub, prm)
             xc = np.where(np.isfinite(out[0]), out[0], xc)
         for arr, new in zip(outs, out, strict=True):

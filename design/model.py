@@ -18,7 +18,8 @@ friction. Effects (spec/formats.md names), each reducing to the baseline in its 
   sequences (:func:`design.equilibrium.solve_sequence`) through :func:`play`.
 
 Unknowns x: rod coordinates (linear: q = (dy, dz, phi_y, phi_z); large deflection: the
-base internal force and moment), then the tip angles with ``torsion``. The residual is
+base internal force n0 and moment m0, scaled to (n0 L^3 / EI, m0 L / EI)), then the tip
+angles with ``torsion``. The residual is
 scaled to metres/radians (its infinity norm is the convergence measure). SI units are
 used for all inputs and outputs.
 """
@@ -30,7 +31,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from design import cantilever
+from design import cantilever, rod
 from design.dipole import dipole_field, dipole_field_gradient
 from design.magnets import cylinder_moment, ring_moment, ring_volume
 from design.parameters import NAMES, parameter_vector
@@ -44,10 +45,7 @@ EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
 
 def available_effects() -> tuple[str, ...]:
     """The effects this version implements (all of EFFECTS once each is wired in)."""
-    return tuple(e for e in EFFECTS if e not in _PENDING)
-
-
-_PENDING = {"large_deflection"}
+    return EFFECTS
 
 
 def parse_effects(text: str) -> frozenset[str]:
@@ -116,7 +114,10 @@ class RingPairModel:
     ``residual`` (x, command, params) -> (r, dr/dx): r = 0 at equilibrium, in m or rad;
     ``stability`` (x, command, params) -> indicator, all entries > 0 iff stable;
     ``pose`` (x, command, params) -> (position (3), frame (3x3), tip angles (2));
-    ``initial`` (command, params) -> x0, the straight robot with tip angles = command.
+    ``initial`` (command, params) -> x0, the straight robot with tip angles = command;
+    ``predictor`` (large_deflection only; else None) (x_linear, command, params) -> x0, a
+    start from the equilibrium x_linear of :meth:`linear` (the same effects on the linear
+    rod).
     ``command`` are the ring angles set at the base (theta1 distal, theta2 proximal) [rad].
     """
 
@@ -126,6 +127,7 @@ class RingPairModel:
     stability: ca.Function = field(init=False, repr=False, compare=False)
     pose: ca.Function = field(init=False, repr=False, compare=False)
     initial: ca.Function = field(init=False, repr=False, compare=False)
+    predictor: ca.Function | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         effects = frozenset(self.effects)
@@ -135,9 +137,8 @@ class RingPairModel:
             raise ValueError(
                 f"unknown model effect(s) {sorted(unknown)}; expected any of {list(EFFECTS)}"
             )
-        if "large_deflection" in effects:
-            raise NotImplementedError("large_deflection is not wired into the model yet")
-        n_rod = 4
+        large = "large_deflection" in effects
+        n_rod = 6 if large else 4
         n = n_rod + (2 if "torsion" in effects else 0)
         object.__setattr__(self, "n_unknowns", n)
 
@@ -164,27 +165,42 @@ class RingPairModel:
                 offset, s.external_moment
             )
 
-        q = x[:n_rod]
-        position, frame = cantilever.tip_pose(q, length)
-        tangent = frame[:, 0]
         angles = x[n_rod : n_rod + 2] if "torsion" in effects else command
         moment = load * s.ring_moment
-        force, torque = tip_wrench(field_model, position, frame, angles, moment, s.ring_spacing)
-
         distributed = ca.SX.zeros(3)
         if "gravity" in effects:
-            g = load * s.gravity
-            ring_weight = s.ring_mass * g
-            force = force + 2 * ring_weight + s["tip_mass"] * g
-            torque = torque + s.ring_spacing * ca.cross(tangent, ring_weight)  # distal ring
-            distributed = s.rod_mass_per_length * g
+            distributed = s.rod_mass_per_length * load * s.gravity
 
-        bending = cantilever.bending_load(force, torque, tangent)
-        r_rod = (
-            q
-            - cantilever.compliance(length, ei) @ bending
-            - cantilever.distributed_load_response(distributed, length, ei)
-        )
+        def tip_loads(position: ca.SX, frame: ca.SX, angles: ca.SX = angles) -> tuple[ca.SX, ca.SX]:
+            """Force and moment about the rod tip at this tip pose. [N, N m]"""
+            force, torque = tip_wrench(field_model, position, frame, angles, moment, s.ring_spacing)
+            if "gravity" in effects:
+                g = load * s.gravity
+                ring_weight = s.ring_mass * g
+                force = force + 2 * ring_weight + s["tip_mass"] * g
+                torque = torque + s.ring_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
+            return force, torque
+
+        q = x[:n_rod]
+        # Rod unknowns of the large-deflection rod: the base wrench (n0, m0), scaled to
+        # deflection units (n0 L^3 / EI, m0 L / EI) [m, rad], so that they, the residual and
+        # the linear rod's coordinates all share one scale (Newton's tolerance, settling).
+        wrench_scale = ca.vertcat(ei / length**3 * ca.DM.ones(3), ei / length * ca.DM.ones(3))
+        if large:
+            r_dimless, rod_state = rod.boundary_residual(
+                q * wrench_scale, length, ei, tip_loads, distributed
+            )
+            position, frame = rod_state.position, rod_state.frame
+            r_rod = r_dimless * ca.vertcat(length * ca.DM.ones(3), ca.DM.ones(3))
+        else:
+            position, frame = cantilever.tip_pose(q, length)
+            force, torque = tip_loads(position, frame)
+            bending = cantilever.bending_load(force, torque, frame[:, 0])
+            r_rod = (
+                q
+                - cantilever.compliance(length, ei) @ bending
+                - cantilever.distributed_load_response(distributed, length, ei)
+            )
         stiffness = [cantilever.stiffness(length, ei)]
         residual = [r_rod]
         if "torsion" in effects:
@@ -193,16 +209,53 @@ class RingPairModel:
             stiffness.append(ca.diag(s.torsional_rigidity / length))
         r = ca.vertcat(*residual)
         jac = ca.jacobian(r, x)
-        # Stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the total
-        # potential for these conservative loads; its symmetric part positive definite
-        # (Sylvester's criterion after a diagonal congruence scaling) means stable.
-        h = ca.diagcat(*stiffness) @ jac
-        hs = 0.5 * (h + h.T)
-        scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
-        hn = hs * (scale @ scale.T)
-        minors = ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
+        if large:
+            # Shooting unknowns have no stiffness form; a fold (snap-through) of the whole
+            # system, where one mode loses stability, is where det(dr/dx) changes sign.
+            # Unloaded, dr/dx = I, so det > 0 holds on every branch connected to rest
+            # without crossing a fold. Symmetric (double) bifurcations are not seen.
+            indicator = ca.det(jac)
+        else:
+            # Stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the total
+            # potential for these conservative loads; its symmetric part positive definite
+            # (Sylvester's criterion after a diagonal congruence scaling) means stable.
+            h = ca.diagcat(*stiffness) @ jac
+            hs = 0.5 * (h + h.T)
+            scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
+            hn = hs * (scale @ scale.T)
+            indicator = ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
 
-        x0 = ca.vertcat(ca.SX.zeros(n_rod), command) if "torsion" in effects else ca.SX.zeros(n_rod)
+        rod0 = ca.SX.zeros(n_rod)
+        x_start = ca.vertcat(rod0, command) if "torsion" in effects else rod0
+        predictor = None
+        if large:
+            # Newton starts from the base wrench that holds the straight rod, or, better
+            # (``predictor``), from the wrench of the linear model's equilibrium x_lin,
+            # balanced about its tip: n0 = f + q L, m0 = tau + p x f + L^2/2 e1 x q. A start
+            # from the straight rod under a large tip moment would coil the rod (psi = M L/EI)
+            # and Newton could settle on a far branch.
+            straight = ca.vertcat(length, 0, 0), ca.SX.eye(3)
+            base = rod.straight_base_wrench(*tip_loads(*straight), length, distributed)
+            rod0 = ca.substitute(base / wrench_scale, x, x_start)
+            x_lin = ca.SX.sym("x_linear", 4 + n - n_rod)
+            lin_angles = x_lin[4:] if "torsion" in effects else command
+            p_lin, frame_lin = cantilever.tip_pose(x_lin[:4], length)
+            f, tau = tip_loads(p_lin, frame_lin, lin_angles)
+            e1 = ca.DM([1.0, 0.0, 0.0])
+            base = ca.vertcat(
+                f + distributed * length,
+                tau + ca.cross(p_lin, f) + length**2 / 2 * ca.cross(e1, distributed),
+            )
+            predictor = ca.Function(
+                "predictor",
+                [x_lin, command, prm],
+                [ca.vertcat(base / wrench_scale, x_lin[4:])],
+                ["x_linear", "command", "params"],
+                ["x0"],
+                {"cse": True},
+            )
+        object.__setattr__(self, "predictor", predictor)
+        x0 = ca.vertcat(rod0, command) if "torsion" in effects else rod0
         io = ["x", "command", "params"]
         opts = {"cse": True}
         object.__setattr__(
@@ -213,7 +266,7 @@ class RingPairModel:
         object.__setattr__(
             self,
             "stability",
-            ca.Function("stability", [x, command, prm], [minors], io, ["minors"], opts),
+            ca.Function("stability", [x, command, prm], [indicator], io, ["indicator"], opts),
         )
         object.__setattr__(
             self,
@@ -254,6 +307,10 @@ class RingPairModel:
         )
         t1, t2 = coupling_torques(angles[0], angles[1], k12)
         return ca.vertcat(out[0] + t1, out[1] + t2)
+
+    def linear(self) -> RingPairModel:
+        """The same model on the linear rod (``large_deflection`` switched off)."""
+        return RingPairModel(self.effects - {"large_deflection"})
 
     @property
     def name(self) -> str:

@@ -76,24 +76,48 @@ def test_tip_moment_in_uniform_field_matches_closed_form():
         assert np.arctan2(-tangent[1], tangent[0]) == pytest.approx(psi, rel=1e-5)
 
 
-def test_antialigned_rings_lose_stability_at_2mB_equal_EI_over_L():
+@pytest.mark.parametrize("lam", [0.2, 2.5, 10.0])
+def test_large_deflection_tip_moment_in_uniform_field_is_the_circular_arc(lam):
+    # A pure tip moment bends the Kirchhoff rod into a circular arc with tip angle
+    # psi = M L / EI (Euler's elastica; Timoshenko & Gere, Theory of Elastic Stability, 1.11)
+    # so EI psi / L = 2 m b cos(psi) holds exactly, and the tip sits at
+    # x = L sin(psi) / psi, y = -L (1 - cos(psi)) / psi. lam = 10: deflection 0.61 L.
+    model = RingPairModel(frozenset({"large_deflection"}))
+    b = lam * EI / (2 * M_RING * L)
+    eq = solve_equilibria(model, uniform_field_params(b, "+x"), 0.0, 0.0)
+    psi = brentq(lambda x: x - lam * np.cos(x), 0, np.pi / 2)
+    assert eq.converged[0] and eq.stable[0]
+    tangent = eq.tangent[0]
+    # The far dipole is uniform to ~1e-6 over the robot (gradient 3 B / FAR).
+    assert np.arctan2(-tangent[1], tangent[0]) == pytest.approx(psi, rel=1e-5)
+    arc = np.array([np.sin(psi), -(1 - np.cos(psi)), 0.0]) * L / psi
+    np.testing.assert_allclose(eq.position[0], arc, atol=1e-5 * L)
+    if lam == 10.0:
+        assert -eq.position[0, 1] > 0.6 * L
+
+
+@pytest.mark.parametrize("effects", [(), ("large_deflection",)])
+def test_antialigned_rings_lose_stability_at_2mB_equal_EI_over_L(effects):
     # Straight robot, both rings antiparallel to a uniform field: the tangent stiffness of
     # the (dy, phi_z) plane, [[12EI/L^3, -6EI/L^2], [-6EI/L^2, 4EI/L - 2mB]], loses
-    # definiteness at 2 m B = EI / L (derived in design/cantilever.py's stiffness).
+    # definiteness at 2 m B = EI / L (derived in design/cantilever.py's stiffness). The
+    # straight state is the same for the Kirchhoff rod, whose linearisation there is the
+    # linear cantilever, so its indicator (sign of det dr/dx) must switch at the same load.
+    model = RingPairModel(frozenset(effects))
     critical = EI / (2 * M_RING * L)
     theta_along_plus_y = 0.0  # rings along +y, field along -y
     below = solve_equilibria(
-        MODEL, uniform_field_params(0.95 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
+        model, uniform_field_params(0.95 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
     )
     above = solve_equilibria(
-        MODEL, uniform_field_params(1.05 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
+        model, uniform_field_params(1.05 * critical, "-y"), theta_along_plus_y, theta_along_plus_y
     )
-    aligned = solve_equilibria(MODEL, uniform_field_params(1.05 * critical, "-y"), np.pi, np.pi)
+    aligned = solve_equilibria(model, uniform_field_params(1.05 * critical, "-y"), np.pi, np.pi)
     assert below.converged[0] and below.stable[0]
     assert above.converged[0] and not above.stable[0]
     assert aligned.converged[0] and aligned.stable[0]
     # Still next to the straight state (the far dipole's tiny gradient nudges it).
-    assert np.abs(above.unknowns[0]).max() < 1e-3
+    assert np.abs(above.position[0, 1:]).max() < 1e-3 * L
 
 
 def test_unconverged_configurations_are_flagged_and_never_numbers(demonstrator, monkeypatch):
