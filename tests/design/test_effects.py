@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 
 from design.designfile import default_design
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
-from design.model import EFFECTS, RingPairModel, available_effects, parse_effects
+from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, available_effects, parse_effects
 from design.parameters import index
 from design.params import Environment
 from design.sections import bending_rigidity, tube_torsional_rigidity
@@ -35,6 +35,7 @@ def set_params(params: np.ndarray, **values: float) -> np.ndarray:
 def test_parse_effects():
     assert parse_effects("none") == frozenset()
     assert parse_effects("all") == frozenset(available_effects()) == frozenset(EFFECTS)
+    assert parse_effects("default") == DEFAULT_EFFECTS < frozenset(EFFECTS)
     assert parse_effects("torsion, gravity") == {"torsion", "gravity"}
     with pytest.raises(ValueError, match="unknown model effect 'twist'"):
         parse_effects("torsion,twist")
