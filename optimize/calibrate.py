@@ -1,0 +1,823 @@
+"""Calibration: fit the model's uncertain physical parameters to measured tip positions.
+
+Nonlinear least squares (``scipy.optimize.least_squares``, trust region reflective, with
+bounds) on the position residuals weighted by their one-sigma uncertainty, with exact
+Jacobians from the CasADi model. At an equilibrium r(x, c, p) = 0 the implicit function
+theorem gives the unknowns' sensitivity dx/dp = -(dr/dx)^-1 dr/dp, and the tip position
+y(x, c, p) of ``model.pose`` moves as dy/dp = dy/dx dx/dp + dy/dp|_x; one compiled
+CasADi function (:func:`sensitivity_function`) returns both for a batch. With
+``hysteresis`` the commands reach the rings through the friction play, so the friction
+angles act through the commands: dy/dw = dy/dc dc/dw, with dc/dw from the same play
+operator on symbols (:func:`design.friction.play_step`).
+
+Parameters are fitted in well-scaled units: scale factors, moduli and remanences by
+their logarithm (relative change), lengths in millimetres, angles in degrees, masses in
+grams (:data:`FREE_PARAMETERS`). Standard errors come from the Gauss-Newton covariance
+(J^T J)^-1 s^2 with s^2 = chi^2 / (rows - parameters), mapped to SI by the delta method.
+Optional priors (``priors=True``) add one Gaussian penalty row per parameter, centred on
+the nominal design, with the widths of :data:`FREE_PARAMETERS`.
+
+Identifiability, said plainly: without gravity or torsion the baseline's tip pose
+depends on the external remanence and the bending rigidity only through their ratio, so
+``bending_rigidity_scale`` and ``external_remanence`` cannot both be free without priors
+(their correlation is reported as +-1 and the fit says so in ``message``).
+
+The paper's method (an exhaustive grid over a stiffness scale and a field scale) is kept
+as :func:`grid_search_two_factors`. SI units are used for all inputs and outputs; the
+``*_mm`` figures of the results are millimetres.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import least_squares
+
+from design.compiled import compile_function
+from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
+from design.friction import play, play_step
+from design.model import RingPairModel
+from design.parameters import NAMES, index
+from design.params import Design
+from optimize.measurements import Measurements
+
+MM = 1e-3
+DEG = np.pi / 180
+DEFAULT_SIGMA = 1e-3
+"""Weight of rows without a sigma when the data give none (the common noise is then
+estimated from the residuals). [m]"""
+TIP_ANGLE_SIGMA = np.deg2rad(3.0)
+"""One-sigma uncertainty of measured tip angles when they are used. [rad]"""
+THREADS = 2
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """How one model parameter is fitted.
+
+    kind : 'log' (fit u = ln(p / p0), for positive quantities) or 'linear'
+        (fit u = (p - p0) / unit).
+    unit : SI value of one fit unit for 'linear' (1e-3: millimetres). [SI]
+    lower, upper : admissible physical range (absolute). [SI]
+    span : for 'linear', the fit may move at most this far from the nominal value. [SI]
+    prior : one-sigma width of the optional prior, in fit units (log: relative).
+    label : unit shown in reports, with its factor from SI.
+    """
+
+    name: str
+    kind: str
+    lower: float
+    upper: float
+    prior: float
+    unit: float = 1.0
+    span: float = np.inf
+    label: tuple[str, float] = ("", 1.0)
+
+
+def _log(name: str, lower: float, upper: float, prior: float, label: str = "") -> FreeParameter:
+    return FreeParameter(name, "log", lower, upper, prior, label=(label, 1.0))
+
+
+FREE_PARAMETERS: dict[str, FreeParameter] = {
+    p.name: p
+    for p in (
+        _log("bending_rigidity_scale", 1e-3, 1e3, 0.5),
+        _log("wire_torsion_scale", 1e-3, 1e3, 1.0),
+        _log("catheter_torsion_scale", 1e-3, 1e3, 1.0),
+        _log("external_remanence", 0.05, 2.5, 0.1, "T"),
+        _log("ring_remanence", 0.05, 2.5, 0.1, "T"),
+        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, "MPa"),
+        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, "MPa"),
+        *(
+            FreeParameter(f"external_center_{a}", "linear", -10.0, 10.0, 5.0, MM, 0.05, ("mm", 1e3))
+            for a in "xyz"
+        ),
+        *(
+            FreeParameter(f"external_axis_{a}", "linear", -2.0, 2.0, 5.0, 0.01, 0.5, ("", 1.0))
+            for a in "xyz"
+        ),
+        FreeParameter("free_length", "linear", 1e-3, 10.0, 5.0, MM, 0.05, ("mm", 1e3)),
+        FreeParameter(
+            "wire_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
+        ),
+        FreeParameter(
+            "catheter_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
+        ),
+        FreeParameter("tip_mass", "linear", 0.0, 0.5, 1.0, 1e-3, label=("g", 1e3)),
+    )
+}
+"""The parameters calibration can free, with their fit units, bounds and prior widths."""
+
+BASELINE_FREE = (
+    "bending_rigidity_scale",
+    "external_center_x",
+    "external_center_y",
+    "external_center_z",
+)
+"""Default free parameters of the baseline: the rod's compliance (which the paper's
+"compound" modulus could not pin down) and where the external magnet really is.
+``external_remanence`` is left out: it is not separable from the bending rigidity
+without gravity or torsion (see the module docstring)."""
+EFFECT_FREE: dict[str, tuple[str, ...]] = {
+    "torsion": ("wire_torsion_scale", "catheter_torsion_scale"),
+    "hysteresis": ("wire_friction_angle", "catheter_friction_angle"),
+    "gravity": ("tip_mass",),
+    "near_field": (),
+    "large_deflection": (),
+}
+"""Each effect's own parameters, freed with it by default."""
+
+
+def default_free(effects: Iterable[str] = ()) -> tuple[str, ...]:
+    """The baseline's free parameters plus each effect's own (in EFFECT_FREE order)."""
+    effects = set(effects)
+    extra = [n for e, names in EFFECT_FREE.items() if e in effects for n in names]
+    return (*BASELINE_FREE, *extra)
+
+
+def _check_free(free: Sequence[str]) -> tuple[str, ...]:
+    free = tuple(free)
+    for name in free:
+        if name not in FREE_PARAMETERS:
+            raise ValueError(
+                f"parameter {name!r} cannot be calibrated; expected names from "
+                f"{', '.join(FREE_PARAMETERS)}"
+            )
+    if len(set(free)) != len(free):
+        raise ValueError(f"free parameters must be distinct; got {list(free)}")
+    if not free:
+        raise ValueError("at least one free parameter is needed")
+    return free
+
+
+# ---------------------------------------------------------------------- sensitivities
+
+
+@lru_cache(maxsize=32)
+def model_with(effects: frozenset[str]) -> RingPairModel:
+    """One model object per set of effects, so its functions are built once per process."""
+    return RingPairModel(effects)
+
+
+SENSITIVE = tuple(FREE_PARAMETERS)
+"""Parameters whose derivatives :func:`sensitivity_function` returns, in this order."""
+
+
+@lru_cache(maxsize=16)
+def sensitivity_function(model: RingPairModel) -> ca.Function:
+    """Compiled (x, command, params) -> (out, d_out) at an equilibrium x of ``model``.
+
+    out : shape (5,), tip position (base frame) [m] and tip ring angles [rad].
+    d_out : shape (5, len(SENSITIVE) + 2), total derivatives of ``out`` along the
+        equilibrium, by the implicit function theorem, with respect to the parameters of
+        SENSITIVE [SI] and then the two commands [rad].
+    """
+    x = ca.SX.sym("x", model.n_unknowns)
+    command = ca.SX.sym("command", 2)
+    prm = ca.SX.sym("params", len(NAMES))
+    free = ca.vertcat(*[prm[index(n)] for n in SENSITIVE])
+    r, dr_dx = model.residual(x, command, prm)
+    position, _, angles = model.pose(x, command, prm)
+    out = ca.vertcat(position, angles)
+    direct = ca.horzcat(ca.jacobian(out, free), ca.jacobian(out, command))
+    dx = -ca.solve(dr_dx, ca.horzcat(ca.jacobian(r, free), ca.jacobian(r, command)))
+    d_out = direct + ca.jacobian(out, x) @ dx
+    fn = ca.Function(
+        "sensitivity",
+        [x, command, prm],
+        [out, d_out],
+        ["x", "command", "params"],
+        ["out", "d_out"],
+        {"cse": True},
+    )
+    return compile_function(fn)
+
+
+@lru_cache(maxsize=64)
+def _mapped_sensitivity(model: RingPairModel, size: int) -> ca.Function:
+    return sensitivity_function(model).map(size, "thread", THREADS)
+
+
+def sensitivities(
+    model: RingPairModel, params: np.ndarray, unknowns: np.ndarray, command: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tip position and angles and their total derivatives for a batch of equilibria.
+
+    params : shape (n,). [SI]  unknowns : shape (N, n_unknowns), converged equilibria.
+    command : shape (N, 2), the commands the rings received (after any play). [rad]
+    Returns out (N, 5) [m, rad] and d_out (N, 5, len(SENSITIVE) + 2). [SI]
+    """
+    n = len(command)
+    k = len(SENSITIVE) + 2
+    if n == 0:
+        return np.zeros((0, 5)), np.zeros((0, 5, k))
+    fn = _mapped_sensitivity(model, n)
+    out, d_out = fn(unknowns.T, command.T, params)
+    out = np.asarray(out).T
+    d_out = np.asarray(d_out).reshape(5, n, k).transpose(1, 0, 2)
+    return out, d_out
+
+
+@lru_cache(maxsize=64)
+def _play_jacobian(n: int) -> ca.Function:
+    """(commands (2, n), half widths (2,)) -> d(ring angles)/d(half widths), (2n, 2),
+    rows in column-major order of the (2, n) angles."""
+    u = ca.SX.sym("u", 2, n)
+    w = ca.SX.sym("w", 2)
+    y = u[:, 0]
+    ys = [y]
+    for k in range(1, n):
+        y = play_step(y, u[:, k], w)
+        ys.append(y)
+    return ca.Function("play_jacobian", [u, w], [ca.jacobian(ca.vertcat(*ys), w)])
+
+
+# ------------------------------------------------------------------------- prediction
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The model's view of measured configurations, rows as in the measurements.
+
+    equilibria : the equilibria, row k for measurement k.
+    applied : shape (N, 2), the commands the rings received (after friction play). [rad]
+    dapplied_dfriction : shape (N, 2, 2) or None, d(applied)/d(wire, catheter friction
+        angle) along the path (hysteresis only). [-]
+    """
+
+    equilibria: Equilibria
+    applied: np.ndarray
+    dapplied_dfriction: np.ndarray | None
+
+
+def predict(
+    model: RingPairModel, params: np.ndarray, m: Measurements, ordered: bool | None = None
+) -> Prediction:
+    """Simulate the configurations of ``m`` with ``model`` and parameters ``params`` [SI].
+
+    ordered : drive the robot through the rows in acquisition order
+        (:meth:`Measurements.order`) with :func:`design.equilibrium.solve_sequence`, as the
+        bench did; default: only when the model has ``hysteresis``. Otherwise each
+        configuration is solved from the straight robot.
+    """
+    if ordered is None:
+        ordered = "hysteresis" in model.effects
+    params = np.asarray(params, float)
+    if not ordered:
+        eq = solve_equilibria(model, params, m.command[:, 0], m.command[:, 1])
+        return Prediction(eq, m.command.copy(), None)
+    order = m.order()
+    cmd = m.command[order]
+    eq_o = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(len(order))
+    eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
+    applied_o, d_o = cmd, None
+    if "hysteresis" in model.effects:
+        width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
+        applied_o = play(cmd.T, width).T
+        jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
+        d_o = jac.reshape(len(cmd), 2, 2)
+    return Prediction(eq, applied_o[inverse], None if d_o is None else d_o[inverse])
+
+
+def prediction_sensitivities(
+    model: RingPairModel, params: np.ndarray, pred: Prediction
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tip position/angles (N, 5) and their derivatives (N, 5, len(SENSITIVE)) with
+    respect to the parameters of SENSITIVE, friction play included. Rows whose
+    equilibrium did not converge are NaN. [SI]"""
+    eq = pred.equilibria
+    n = len(eq)
+    out = np.full((n, 5), np.nan)
+    d_out = np.full((n, 5, len(SENSITIVE)), np.nan)
+    ok = np.flatnonzero(eq.converged)
+    if ok.size:
+        o, d = sensitivities(model, params, eq.unknowns[ok], pred.applied[ok])
+        dp = d[:, :, : len(SENSITIVE)].copy()
+        if pred.dapplied_dfriction is not None:
+            dc = d[:, :, len(SENSITIVE) :]
+            for j, name in enumerate(("wire_friction_angle", "catheter_friction_angle")):
+                col = SENSITIVE.index(name)
+                dp[:, :, col] += np.einsum("nij,nj->ni", dc, pred.dapplied_dfriction[ok, :, j])
+        out[ok], d_out[ok] = o, dp
+    return out, d_out
+
+
+# ------------------------------------------------------------------------ calibration
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def row_sigma(m: Measurements, sigma: float | None = None) -> np.ndarray:
+    """One-sigma position uncertainty of each row [m], shape (N,): the data's own where
+    given, else ``sigma``, else the median of the given ones, else DEFAULT_SIGMA."""
+    s = m.sigma.copy()
+    given = np.isfinite(s)
+    if sigma is not None:
+        fill = float(sigma)
+    elif given.any():
+        fill = float(np.median(s[given]))
+    else:
+        fill = DEFAULT_SIGMA
+    s[~given] = fill
+    return s
+
+
+def position_errors(position: np.ndarray, m: Measurements) -> np.ndarray:
+    """Distance between model and measured tip over the measured coordinates, per row;
+    NaN where the model has no equilibrium. shape (N,) [m]"""
+    diff = np.where(m.measured, position - m.position, 0.0)
+    dist = np.sqrt(np.sum(diff**2, axis=1))
+    return np.where(np.isfinite(position).all(axis=1), dist, np.nan)
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """A fitted model.
+
+    names : the free parameters.
+    estimate, standard_error, nominal : by name. [SI]
+    correlation : shape (k, k), correlation of the estimates (Gauss-Newton).
+    params : shape (n,), full model parameter vector at the estimate. [SI]
+    effects : the model's effects.
+    residuals : shape (N, 3), measured - model tip position; NaN where not measured or
+        not converged. [m]
+    errors : shape (N,), distance model-measurement over the measured coordinates. [m]
+    rows : shape (N,) bool, the rows that were fitted.
+    rmse_mm, max_abs_mm : root mean square and largest of ``errors`` over the fitted rows. [mm]
+    noise_mm : the common position noise the residuals imply, s * sigma. [mm]
+    chi2, dof : weighted sum of squared data residuals and its degrees of freedom.
+    converged : the optimiser met its tolerance and every fitted row has an equilibrium.
+    at_bounds : names of parameters that ended on a bound (their errors are unreliable).
+    unconverged : number of fitted rows without an equilibrium at the estimate.
+    evaluations : number of model solves; time_s : wall time. [s]
+    message : the optimiser's message, plus any warning on identifiability.
+    """
+
+    names: tuple[str, ...]
+    estimate: dict[str, float]
+    standard_error: dict[str, float]
+    nominal: dict[str, float]
+    correlation: np.ndarray
+    params: np.ndarray
+    effects: frozenset[str]
+    residuals: np.ndarray
+    errors: np.ndarray
+    rows: np.ndarray
+    rmse_mm: float
+    max_abs_mm: float
+    noise_mm: float
+    chi2: float
+    dof: int
+    converged: bool
+    at_bounds: tuple[str, ...]
+    unconverged: int
+    evaluations: int
+    time_s: float
+    message: str = ""
+    priors: bool = field(default=False)
+
+    def table(self) -> list[dict[str, object]]:
+        """One row per parameter in report units: name, unit, nominal, estimate, standard
+        error, relative change."""
+        rows = []
+        for name in self.names:
+            label, factor = FREE_PARAMETERS[name].label
+            nom, est = self.nominal[name], self.estimate[name]
+            rows.append(
+                {
+                    "name": name,
+                    "unit": label,
+                    "nominal": nom * factor,
+                    "estimate": est * factor,
+                    "standard_error": self.standard_error[name] * factor,
+                    "change": (est / nom - 1) if nom else float("nan"),
+                }
+            )
+        return rows
+
+
+class _Problem:
+    """Residuals and Jacobian in fit units u, with the last solve cached (least_squares
+    asks for the Jacobian at the point whose residuals it has just computed)."""
+
+    def __init__(
+        self,
+        model: RingPairModel,
+        base: np.ndarray,
+        names: tuple[str, ...],
+        m: Measurements,
+        rows: np.ndarray,
+        sigma: np.ndarray,
+        ordered: bool | None,
+        priors: bool,
+        tip_angles: bool,
+        nominal_u: np.ndarray,
+    ) -> None:
+        self.model, self.base, self.names, self.m = model, base, names, m
+        self.ordered, self.priors, self.nominal_u = ordered, priors, nominal_u
+        self.spec = [FREE_PARAMETERS[n] for n in names]
+        self.p0 = np.array([base[index(n)] for n in names])
+        self.cols = [SENSITIVE.index(n) for n in names]
+        self.idx = [index(n) for n in names]
+        fit = np.zeros(len(m), bool)
+        fit[rows] = True
+        self.fit = fit
+        self.pos_mask = m.measured & fit[:, None]
+        self.ang_mask = (
+            np.isfinite(m.tip_angles) & fit[:, None] if tip_angles else np.zeros((len(m), 2), bool)
+        )
+        self.sigma = sigma
+        rest = np.array([base[index("free_length")], 0.0, 0.0])
+        # A row without an equilibrium costs what the straight robot would (a plateau the
+        # trust region steps back from).
+        self.fail_offset = np.where(m.measured, rest - m.position, 0.0)
+        self.evaluations = 0
+        self._key: bytes | None = None
+        self._cache: tuple[np.ndarray, np.ndarray, Prediction] | None = None
+
+    def invalidate(self) -> None:
+        """Forget the cached solve (after a change of weights)."""
+        self._key, self._cache = None, None
+
+    def params(self, u: np.ndarray) -> np.ndarray:
+        p = self.base.copy()
+        for j, (spec, p0) in enumerate(zip(self.spec, self.p0, strict=True)):
+            p[self.idx[j]] = p0 * np.exp(u[j]) if spec.kind == "log" else p0 + spec.unit * u[j]
+        return p
+
+    def dp_du(self, u: np.ndarray) -> np.ndarray:
+        p = self.params(u)
+        return np.array(
+            [p[i] if s.kind == "log" else s.unit for i, s in zip(self.idx, self.spec, strict=True)]
+        )
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = [], []
+        for spec, p0 in zip(self.spec, self.p0, strict=True):
+            if spec.kind == "log":
+                lo.append(np.log(spec.lower / p0))
+                hi.append(np.log(spec.upper / p0))
+            else:
+                lo.append(max(spec.lower - p0, -spec.span) / spec.unit)
+                hi.append(min(spec.upper - p0, spec.span) / spec.unit)
+        return np.array(lo), np.array(hi)
+
+    def evaluate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, Prediction]:
+        key = np.asarray(u, float).tobytes()
+        if key != self._key or self._cache is None:
+            p = self.params(u)
+            pred = predict(self.model, p, self.m, self.ordered)
+            out, d_out = prediction_sensitivities(self.model, p, pred)
+            self.evaluations += 1
+            self._key, self._cache = key, (out, d_out, pred)
+        return self._cache
+
+    def residuals(self, u: np.ndarray) -> np.ndarray:
+        out, _, _ = self.evaluate(u)
+        r_pos = (out[:, :3] - self.m.position) / self.sigma[:, None]
+        r_pos = np.where(np.isfinite(r_pos), r_pos, self.fail_offset / self.sigma[:, None])
+        r_ang = _wrap(out[:, 3:] - self.m.tip_angles) / TIP_ANGLE_SIGMA
+        r_ang = np.where(np.isfinite(r_ang), r_ang, 0.0)
+        parts = [r_pos[self.pos_mask], r_ang[self.ang_mask]]
+        if self.priors:
+            parts.append((u - self.nominal_u) / np.array([s.prior for s in self.spec]))
+        return np.concatenate(parts)
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        _, d_out, _ = self.evaluate(u)
+        d = d_out[:, :, self.cols] * self.dp_du(u)[None, None, :]
+        d = np.where(np.isfinite(d), d, 0.0)
+        j_pos = d[:, :3, :] / self.sigma[:, None, None]
+        j_ang = d[:, 3:, :] / TIP_ANGLE_SIGMA
+        parts = [j_pos[self.pos_mask], j_ang[self.ang_mask]]
+        if self.priors:
+            parts.append(np.diag(1 / np.array([s.prior for s in self.spec])))
+        return np.vstack(parts)
+
+    def n_data(self) -> int:
+        return int(self.pos_mask.sum() + self.ang_mask.sum())
+
+
+def calibrate(
+    design: Design,
+    m: Measurements,
+    effects: Iterable[str] = (),
+    free: Sequence[str] | None = None,
+    *,
+    rows: np.ndarray | Sequence[int] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    initial: Mapping[str, float] | None = None,
+    priors: bool = False,
+    sigma: float | None = None,
+    ordered: bool | None = None,
+    tip_angles: bool = True,
+    max_nfev: int | None = None,
+) -> CalibrationResult:
+    """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
+
+    free : names from :data:`FREE_PARAMETERS`; default :func:`default_free` (effects).
+    rows : the rows to fit (indices or mask); default all. The others are still simulated
+        (along the path when ordered) and get residuals, for cross-validation.
+    fixed : values of other model parameters (names of ``design.parameters.NAMES``) that
+        differ from the design, e.g. an earlier fit's. [SI]
+    initial : starting values of free parameters; default the nominal design's. [SI]
+    priors : add a Gaussian penalty row per free parameter, centred on the nominal design,
+        with the width of :data:`FREE_PARAMETERS`.
+    sigma : one-sigma position uncertainty for rows whose data give none. [m]
+    ordered : see :func:`predict`.
+    tip_angles : also fit measured tip angles (sigma TIP_ANGLE_SIGMA) where present.
+    """
+    t0 = time.perf_counter()
+    model = model_with(frozenset(effects))
+    names = _check_free(default_free(model.effects) if free is None else free)
+    base = model.parameters(design)
+    for name, value in (fixed or {}).items():
+        base[index(name)] = float(value)
+    nominal = {n: float(base[index(n)]) for n in names}
+    for n in names:
+        if FREE_PARAMETERS[n].kind == "log" and not nominal[n] > 0:
+            raise ValueError(f"{n} must be positive to be fitted on a log scale; got {nominal[n]}")
+    start = dict(nominal)
+    for name, value in (initial or {}).items():
+        if name not in names:
+            raise ValueError(f"initial value for {name!r}, which is not free ({list(names)})")
+        start[name] = float(value)
+    fit_rows = np.arange(len(m)) if rows is None else np.arange(len(m))[np.asarray(rows)]
+    s_rows = row_sigma(m, sigma)
+    prob = _Problem(
+        model, base, names, m, fit_rows, s_rows, ordered, priors, tip_angles, np.zeros(len(names))
+    )
+    lo, hi = prob.bounds()
+    u0 = np.array(
+        [
+            np.log(start[n] / nominal[n])
+            if FREE_PARAMETERS[n].kind == "log"
+            else (start[n] - nominal[n]) / FREE_PARAMETERS[n].unit
+            for n in names
+        ]
+    )
+    # Start strictly inside the bounds: a parameter whose nominal value is a bound (no
+    # friction, no tip mass) would otherwise start where its derivative is one-sided.
+    inset = np.minimum(0.05 * np.array([FREE_PARAMETERS[n].prior for n in names]), 0.01 * (hi - lo))
+    u0 = np.clip(u0, lo + inset, hi - inset)
+    if prob.n_data() < len(names):
+        raise ValueError(
+            f"{prob.n_data()} measured coordinates cannot determine {len(names)} parameters"
+        )
+    dof = max(prob.n_data() - len(names), 1)
+    # With priors, the weight of the data against them needs the noise: when the data do
+    # not give it, estimate it from a first fit's residuals and fit again.
+    noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
+    passes = 2 if priors and not noise_known else 1
+    for attempt in range(passes):
+        sol = least_squares(
+            prob.residuals,
+            u0,
+            jac=prob.jacobian,
+            bounds=(lo, hi),
+            method="trf",
+            x_scale=1.0,
+            max_nfev=max_nfev or 50 * (len(names) + 1),
+        )
+        u0 = sol.x
+        if attempt + 1 < passes:
+            r = prob.residuals(sol.x)[: prob.n_data()]
+            prob.sigma = prob.sigma * np.sqrt(float(r @ r) / dof)
+            prob.invalidate()
+    u = sol.x
+    out, _, pred = prob.evaluate(u)
+    p = prob.params(u)
+    r_data = prob.residuals(u)[: prob.n_data()]
+    chi2 = float(r_data @ r_data)
+    s2 = chi2 / dof
+    jac = prob.jacobian(u)
+    jtj = jac.T @ jac
+    cov_u = np.linalg.pinv(jtj) * s2
+    sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_u / np.outer(sd_u, sd_u)
+    message = str(sol.message)
+    rank = np.linalg.matrix_rank(jtj, tol=1e-10 * max(np.abs(jtj).max(), 1e-300))
+    if rank < len(names):
+        message += (
+            f"; the data determine only {rank} of {len(names)} parameter combinations "
+            "(correlated parameters: free fewer, or use priors)"
+        )
+    dpdu = prob.dp_du(u)
+    at_bounds = tuple(
+        n
+        for n, ui, a, b in zip(names, u, lo, hi, strict=True)
+        if min(ui - a, b - ui) < 1e-6 * max(1.0, abs(ui))
+    )
+    position = out[:, :3]
+    residuals = np.where(m.measured, m.position - position, np.nan)
+    errors = position_errors(position, m)
+    fitted = prob.fit
+    unconverged = int(np.count_nonzero(fitted & ~pred.equilibria.converged))
+    e = errors[fitted]
+    e = e[np.isfinite(e)]
+    common = np.median(prob.sigma[fitted]) if fitted.any() else DEFAULT_SIGMA
+    return CalibrationResult(
+        names=names,
+        estimate={n: float(p[index(n)]) for n in names},
+        standard_error={n: float(abs(dpdu[j]) * sd_u[j]) for j, n in enumerate(names)},
+        nominal=nominal,
+        correlation=corr,
+        params=p,
+        effects=model.effects,
+        residuals=residuals,
+        errors=errors,
+        rows=fitted,
+        rmse_mm=float(np.sqrt(np.mean(e**2)) / MM) if e.size else float("nan"),
+        max_abs_mm=float(e.max() / MM) if e.size else float("nan"),
+        noise_mm=float(np.sqrt(s2) * common / MM),
+        chi2=chi2,
+        dof=dof,
+        converged=bool(sol.status > 0 and unconverged == 0),
+        at_bounds=at_bounds,
+        unconverged=unconverged,
+        evaluations=prob.evaluations,
+        time_s=time.perf_counter() - t0,
+        message=message,
+        priors=priors,
+    )
+
+
+# -------------------------------------------------------------------- cross-validation
+
+
+@dataclass(frozen=True)
+class CrossValidation:
+    """K-fold cross-validation over held-out configurations.
+
+    rmse_mm : RMS over all held-out rows of the model-measurement distance. [mm]
+    fold_rmse_mm : shape (k,), the same per fold. [mm]
+    errors : shape (N,), each row's distance when it was held out; NaN if unsolved. [m]
+    folds : shape (N,) int, the fold of each row.
+    unconverged : held-out rows the fitted model could not solve.
+    """
+
+    rmse_mm: float
+    fold_rmse_mm: np.ndarray
+    errors: np.ndarray
+    folds: np.ndarray
+    unconverged: int
+
+
+def configuration_folds(m: Measurements, k: int, seed: int | None = 0) -> np.ndarray:
+    """Fold number of each row (shape (N,)): rows with the same commanded angles share a
+    fold, so a held-out configuration is never seen in training; folds are seeded."""
+    _, group = np.unique(np.round(m.command, 12), axis=0, return_inverse=True)
+    group = np.asarray(group).ravel()
+    n_groups = int(group.max()) + 1
+    if not 2 <= k <= n_groups:
+        raise ValueError(
+            f"k must be between 2 and the number of distinct configurations ({n_groups}); got {k}"
+        )
+    perm = np.random.default_rng(seed).permutation(n_groups)
+    fold_of_group = np.empty(n_groups, int)
+    fold_of_group[perm] = np.arange(n_groups) % k
+    return fold_of_group[group]
+
+
+def cross_validate(
+    design: Design,
+    m: Measurements,
+    effects: Iterable[str] = (),
+    free: Sequence[str] | None = None,
+    *,
+    k: int = 5,
+    seed: int | None = 0,
+    **options: object,
+) -> CrossValidation:
+    """K-fold cross-validated position error of :func:`calibrate` (same ``options``):
+    fit on k-1 folds of configurations, predict the held-out fold."""
+    folds = configuration_folds(m, k, seed)
+    errors = np.full(len(m), np.nan)
+    fold_rmse = np.full(k, np.nan)
+    for f in range(k):
+        train = folds != f
+        res = calibrate(design, m, effects, free, rows=train, **options)  # type: ignore[arg-type]
+        held = ~train
+        errors[held] = res.errors[held]
+        e = res.errors[held]
+        e = e[np.isfinite(e)]
+        fold_rmse[f] = np.sqrt(np.mean(e**2)) / MM if e.size else np.nan
+    ok = np.isfinite(errors)
+    return CrossValidation(
+        rmse_mm=float(np.sqrt(np.mean(errors[ok] ** 2)) / MM) if ok.any() else float("nan"),
+        fold_rmse_mm=fold_rmse,
+        errors=errors,
+        folds=folds,
+        unconverged=int(np.count_nonzero(~ok)),
+    )
+
+
+# ------------------------------------------------------------ the paper's grid search
+
+PAPER_STIFFNESS_GRID = np.linspace(2 / 3, 4 / 3, 10)
+"""The paper's K_E grid, 0.009 .. 0.018 in steps of 0.001 (10 values), relative to its
+centre 0.0135: a factor of 2 in 10 steps. Multiplied by ``stiffness_center``."""
+PAPER_FIELD_GRID = np.linspace(0.875, 1.125, 101)
+"""The paper's K_B grid, 3.5 .. 4.5 in steps of 0.01 (101 values), relative to its centre
+4.0: +-12.5 % in steps of 0.25 %. Multiplied by ``field_center``."""
+
+
+@dataclass(frozen=True)
+class GridResult:
+    """The paper's two-factor exhaustive search.
+
+    stiffness_scale, field_scale : the best grid point (K_E, K_B). [-]
+    objective : shape (len(stiffness_grid), len(field_grid)), the criterion at every grid
+        point (the paper's: largest distance); NaN where a configuration did not solve. [m]
+    params : shape (n,), model parameters at the best point. [SI]
+    errors : shape (N,), distances at the best point. [m]
+    rmse_mm, max_abs_mm : of ``errors``. [mm]
+    evaluations : model solves (one per grid point); time_s : wall time. [s]
+    """
+
+    stiffness_scale: float
+    field_scale: float
+    stiffness_grid: np.ndarray
+    field_grid: np.ndarray
+    objective: np.ndarray
+    params: np.ndarray
+    errors: np.ndarray
+    rmse_mm: float
+    max_abs_mm: float
+    evaluations: int
+    time_s: float
+
+
+def two_factor_parameters(base: np.ndarray, stiffness: float, field_scale: float) -> np.ndarray:
+    """The paper's parameterisation: K_E scales the bending rigidity; K_B scales the
+    external dipole's moment and its position (m_e' = K_B m_e, p_e' = K_B p_e, the
+    paper's eq. for the tuned field). [SI]"""
+    p = base.copy()
+    p[index("bending_rigidity_scale")] *= stiffness
+    p[index("external_remanence")] *= field_scale
+    for a in "xyz":
+        p[index(f"external_center_{a}")] *= field_scale
+    return p
+
+
+def grid_search_two_factors(
+    design: Design,
+    m: Measurements,
+    effects: Iterable[str] = (),
+    *,
+    stiffness_grid: np.ndarray | None = None,
+    field_grid: np.ndarray | None = None,
+    stiffness_center: float = 1.0,
+    field_center: float = 1.0,
+    objective: str = "max",
+    ordered: bool | None = None,
+) -> GridResult:
+    """The paper's calibration: an exhaustive search over a stiffness scale K_E and a
+    field scale K_B (:func:`two_factor_parameters`) minimising the largest tip error
+    (``objective='max'``, the paper's e_max) or the RMS error (``'rms'``). Default grid:
+    the paper's resolution (PAPER_STIFFNESS_GRID x PAPER_FIELD_GRID, 10 x 101 points)
+    around the given centres. Each grid point solves every configuration once."""
+    if objective not in ("max", "rms"):
+        raise ValueError(f"objective must be 'max' or 'rms'; got {objective!r}")
+    t0 = time.perf_counter()
+    model = model_with(frozenset(effects))
+    base = model.parameters(design)
+    ks = stiffness_center * (PAPER_STIFFNESS_GRID if stiffness_grid is None else stiffness_grid)
+    kb = field_center * (PAPER_FIELD_GRID if field_grid is None else field_grid)
+    table = np.full((len(ks), len(kb)), np.nan)
+    best: tuple[float, int, int, np.ndarray] = (np.inf, 0, 0, np.full(len(m), np.nan))
+    for i, ke in enumerate(ks):
+        for j, kf in enumerate(kb):
+            p = two_factor_parameters(base, ke, kf)
+            e = position_errors(predict(model, p, m, ordered).equilibria.position, m)
+            if not np.isfinite(e).all():
+                continue
+            value = float(e.max() if objective == "max" else np.sqrt(np.mean(e**2)))
+            table[i, j] = value
+            if value < best[0]:
+                best = (value, i, j, e)
+    _, i, j, e = best
+    ok = np.isfinite(e)
+    return GridResult(
+        stiffness_scale=float(ks[i]),
+        field_scale=float(kb[j]),
+        stiffness_grid=ks,
+        field_grid=kb,
+        objective=table,
+        params=two_factor_parameters(base, ks[i], kb[j]),
+        errors=e,
+        rmse_mm=float(np.sqrt(np.mean(e[ok] ** 2)) / MM) if ok.any() else float("nan"),
+        max_abs_mm=float(e[ok].max() / MM) if ok.any() else float("nan"),
+        evaluations=table.size,
+        time_s=time.perf_counter() - t0,
+    )

@@ -1,0 +1,180 @@
+"""Synthetic bench data: simulate a robot driven along a bench path, add tracker noise.
+
+The "truth" is the design with optional parameter overrides (e.g. a softer rod, a wire
+that twists, friction in the transmissions) under a model with the chosen effects. The
+robot is driven along the commands in order (:func:`design.equilibrium.solve_sequence`),
+as on a bench, so hysteresis and snap-through appear as they would; each row records its
+place in that order (``sequence``). Configurations whose equilibrium does not converge
+or is unstable are dropped and counted. SI units are used for all inputs and outputs.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from design.equilibrium import Equilibria, solve_sequence
+from design.model import RingPairModel
+from design.parameters import NAMES, index
+from design.params import Design
+from optimize.measurements import Measurements, make_measurements
+
+VIEWS = ("3d", "top")
+"""'3d': x, y and z measured; 'top': a camera above the robot sees x and y only."""
+
+DEFAULT_N = 60
+DEFAULT_PROXIMAL_DEG = (0.0, 120.0, 240.0)
+"""theta2 values of the default bench path. [deg]"""
+
+
+def default_commands(n: int = DEFAULT_N) -> np.ndarray:
+    """A bench path like the paper's, about ``n`` points: for each theta2 in
+    DEFAULT_PROXIMAL_DEG, theta1 sweeps from theta2 (parallel rings) to theta2 + 180 deg
+    (antiparallel) and back, so both directions of travel are seen.
+
+    Returns shape (M, 2), M close to n, in driving order. [rad]
+    """
+    if n < 2 * len(DEFAULT_PROXIMAL_DEG):
+        raise ValueError(f"n must be at least {2 * len(DEFAULT_PROXIMAL_DEG)}; got {n}")
+    per_block = n / len(DEFAULT_PROXIMAL_DEG)
+    steps = max(1, int(round((per_block - 1) / 2)))  # forward steps; block = 2 steps + 1
+    relative = np.linspace(0.0, 180.0, steps + 1)
+    sweep = np.concatenate([relative, relative[-2::-1]])
+    rows = [np.column_stack([t2 + sweep, np.full(sweep.size, t2)]) for t2 in DEFAULT_PROXIMAL_DEG]
+    return np.deg2rad(np.vstack(rows))
+
+
+@dataclass(frozen=True)
+class Synthetic:
+    """A synthetic data set and how it was made.
+
+    measurements : the noisy data (dropped configurations removed).
+    params : shape (n,), the true model parameter vector (design + overrides). [SI]
+    model : the model that produced the data.
+    equilibria : the noise-free simulation of every commanded configuration, in order.
+    dropped : number of configurations dropped (unconverged or unstable).
+    snapped : number of kept configurations reached by a snap-through.
+    """
+
+    measurements: Measurements
+    params: np.ndarray
+    model: RingPairModel
+    equilibria: Equilibria
+    dropped: int
+    snapped: int
+
+
+def true_parameters(design: Design, params_override: Mapping[str, float] | None) -> np.ndarray:
+    """Parameter vector of ``design`` with ``params_override`` (names of
+    :data:`design.parameters.NAMES`, SI values) applied; ValueError names a bad name."""
+    params = RingPairModel.parameters(design)
+    for name, value in (params_override or {}).items():
+        if name not in NAMES:
+            close = difflib.get_close_matches(name, NAMES, n=1, cutoff=0.6)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise ValueError(f"unknown model parameter {name!r}{hint}")
+        value = float(value)
+        if not np.isfinite(value):
+            raise ValueError(f"parameter {name} must be a finite number; got {value!r}")
+        params[index(name)] = value
+    return params
+
+
+def synthesize_data(
+    design: Design,
+    effects: Iterable[str] = (),
+    *,
+    commands: np.ndarray | None = None,
+    n: int = DEFAULT_N,
+    view: str = "3d",
+    noise_mm: float = 0.3,
+    seed: int | None = 0,
+    params_override: Mapping[str, float] | None = None,
+    tip_angles: bool = False,
+    angle_noise_deg: float = 1.0,
+    record_sigma: bool = False,
+) -> Synthetic:
+    """Simulate a bench run of ``design`` and return the data with how they were made.
+
+    effects : model effects of the truth (names of :data:`design.model.EFFECTS`).
+    commands : shape (M, 2), commanded (theta1, theta2) in driving order [rad]; default
+        :func:`default_commands` (``n``).
+    view : '3d' (x, y, z measured) or 'top' (x, y; z left empty).
+    noise_mm : one-sigma Gaussian noise on each measured coordinate. [mm]
+    seed : seed of ``numpy.random.default_rng``; the same seed gives the same data.
+    params_override : true values of model parameters (names of
+        :data:`design.parameters.NAMES`) that differ from the design. [SI]
+    tip_angles : also record the ring angles at the tip, with ``angle_noise_deg`` noise. [deg]
+    record_sigma : write ``noise_mm`` as each row's sigma (default: the data do not say).
+    """
+    if view not in VIEWS:
+        raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
+    if not (np.isfinite(noise_mm) and noise_mm >= 0):
+        raise ValueError(f"noise_mm must be a finite number >= 0; got {noise_mm!r}")
+    if not (np.isfinite(angle_noise_deg) and angle_noise_deg >= 0):
+        raise ValueError(f"angle_noise_deg must be a finite number >= 0; got {angle_noise_deg!r}")
+    model = RingPairModel(frozenset(effects))
+    params = true_parameters(design, params_override)
+    cmd = default_commands(n) if commands is None else np.asarray(commands, float).reshape(-1, 2)
+    if len(cmd) == 0:
+        raise ValueError("commands must hold at least one (theta1, theta2) pair")
+    eq = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    keep = eq.converged & eq.stable
+    rng = np.random.default_rng(seed)
+    noise = rng.normal(0.0, noise_mm * 1e-3, size=(len(cmd), 3))
+    angle_noise = rng.normal(0.0, np.deg2rad(angle_noise_deg), size=(len(cmd), 2))
+    position = eq.position + noise
+    if view == "top":
+        position[:, 2] = np.nan
+    angles = eq.tip_angles + angle_noise if tip_angles else None
+    sigma = np.full(len(cmd), noise_mm * 1e-3) if record_sigma and noise_mm > 0 else None
+    rows = np.flatnonzero(keep)
+    m = make_measurements(
+        cmd[rows],
+        position[rows],
+        tip_angles=None if angles is None else angles[rows],
+        sequence=rows,
+        sigma=None if sigma is None else sigma[rows],
+        source=f"synthetic ({model.name} model, {view} view, noise {noise_mm:g} mm, seed {seed})",
+    )
+    return Synthetic(
+        measurements=m,
+        params=params,
+        model=model,
+        equilibria=eq,
+        dropped=int(np.count_nonzero(~keep)),
+        snapped=int(np.count_nonzero(eq.snapped & keep)),
+    )
+
+
+def synthesize(
+    design: Design,
+    effects: Iterable[str] = (),
+    *,
+    commands: np.ndarray | None = None,
+    n: int = DEFAULT_N,
+    view: str = "3d",
+    noise_mm: float = 0.3,
+    seed: int | None = 0,
+    params_override: Mapping[str, float] | None = None,
+    tip_angles: bool = False,
+    angle_noise_deg: float = 1.0,
+    record_sigma: bool = False,
+) -> Measurements:
+    """The measurements of :func:`synthesize_data` (same arguments)."""
+    return synthesize_data(
+        design,
+        effects,
+        commands=commands,
+        n=n,
+        view=view,
+        noise_mm=noise_mm,
+        seed=seed,
+        params_override=params_override,
+        tip_angles=tip_angles,
+        angle_noise_deg=angle_noise_deg,
+        record_sigma=record_sigma,
+    ).measurements

@@ -1,0 +1,243 @@
+"""Calibration: the implicit-function Jacobian against finite differences, recovery of
+planted parameters within the reported uncertainty (coverage), the paper's grid search
+and cross-validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from design.equilibrium import solve_equilibria, solve_sequence
+from design.model import RingPairModel
+from design.parameters import index
+from optimize.calibrate import (
+    PAPER_FIELD_GRID,
+    PAPER_STIFFNESS_GRID,
+    SENSITIVE,
+    calibrate,
+    configuration_folds,
+    cross_validate,
+    grid_search_two_factors,
+    predict,
+    prediction_sensitivities,
+    two_factor_parameters,
+)
+from optimize.measurements import make_measurements
+from optimize.synth import default_commands, synthesize, synthesize_data
+
+
+def _fd_columns(solve, params, names, rel=1e-6):
+    """Central finite differences of the tip position and angles (N, 5, k). [SI]"""
+    cols = []
+    for name in names:
+        i = index(name)
+        h = rel * max(abs(params[i]), 1e-3)
+        up, down = params.copy(), params.copy()
+        up[i] += h
+        down[i] -= h
+        a, b = solve(up), solve(down)
+        cols.append(
+            (np.hstack([a.position, a.tip_angles]) - np.hstack([b.position, b.tip_angles]))
+            / (2 * h)
+        )
+    return np.stack(cols, axis=2)
+
+
+def _check_jacobian(model, params, solve, names, ordered=None, m=None):
+    pred = predict(model, params, m, ordered)
+    _, d = prediction_sensitivities(model, params, pred)
+    exact = d[:, :, [SENSITIVE.index(n) for n in names]]
+    fd = _fd_columns(solve, params, names)
+    scale = np.abs(fd).max(axis=(0, 1), keepdims=True) + 1e-12
+    np.testing.assert_allclose(exact / scale, fd / scale, atol=2e-5)
+
+
+NAMES_BASELINE = (
+    "bending_rigidity_scale",
+    "external_remanence",
+    "ring_remanence",
+    "external_center_x",
+    "external_center_y",
+    "external_center_z",
+    "external_axis_y",
+    "free_length",
+    "wire_youngs_modulus",
+)
+
+
+def test_implicit_function_jacobian_matches_finite_differences_baseline(demonstrator):
+    model = RingPairModel()
+    params = model.parameters(demonstrator)
+    params[index("external_center_y")] = 0.003  # off-axis: no symmetric zero derivatives
+    m = synthesize(demonstrator, n=6, noise_mm=0.0)
+
+    def solve(p):
+        return solve_equilibria(model, p, m.command[:, 0], m.command[:, 1])
+
+    _check_jacobian(model, params, solve, NAMES_BASELINE, m=m)
+
+
+def test_implicit_function_jacobian_matches_finite_differences_torsion(demonstrator):
+    model = RingPairModel(frozenset({"torsion"}))
+    params = model.parameters(demonstrator)
+    params[index("wire_torsion_scale")] = 3.0  # stiff enough to hold every configuration
+    # rings neither parallel nor antiparallel, where the lags vanish by symmetry
+    cmd = np.deg2rad([[30.0, 0.0], [75.0, 10.0], [110.0, -20.0], [150.0, 45.0], [250.0, 100.0]])
+    m = make_measurements(cmd, np.zeros((len(cmd), 3)))
+
+    def solve(p):
+        return solve_equilibria(model, p, m.command[:, 0], m.command[:, 1])
+
+    names = (
+        "wire_torsion_scale",
+        "catheter_torsion_scale",
+        "bending_rigidity_scale",
+        "ring_remanence",
+    )
+    _check_jacobian(model, params, solve, names, m=m)
+
+
+def test_friction_acts_through_the_play_in_the_jacobian(demonstrator):
+    model = RingPairModel(frozenset({"hysteresis"}))
+    params = model.parameters(demonstrator)
+    params[index("wire_friction_angle")] = np.deg2rad(3.3)
+    params[index("catheter_friction_angle")] = np.deg2rad(1.7)
+    m = synthesize(demonstrator, n=12, noise_mm=0.0)
+    cmd = m.command
+
+    def solve(p):
+        return solve_sequence(model, p, cmd[:, 0], cmd[:, 1])
+
+    names = ("wire_friction_angle", "catheter_friction_angle", "bending_rigidity_scale")
+    _check_jacobian(model, params, solve, names, ordered=True, m=m)
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_calibration_recovers_planted_baseline_parameters_within_uncertainty(demonstrator, seed):
+    rng = np.random.default_rng(seed)
+    nominal = RingPairModel.parameters(demonstrator)
+    truth = {
+        "bending_rigidity_scale": rng.uniform(0.6, 1.4),
+        **{
+            f"external_center_{a}": nominal[index(f"external_center_{a}")]
+            + rng.uniform(-3e-3, 3e-3)
+            for a in "xyz"
+        },
+    }
+    noise = rng.uniform(0.1, 0.5)
+    view = str(rng.choice(["3d", "top"]))
+    m = synthesize(demonstrator, noise_mm=noise, seed=seed, view=view, params_override=truth)
+    res = calibrate(demonstrator, m)
+    assert res.converged and not res.at_bounds and res.unconverged == 0
+    for name, value in truth.items():
+        assert abs(res.estimate[name] - value) < 3 * res.standard_error[name], name
+    assert res.noise_mm == pytest.approx(noise, rel=0.3)
+    assert np.allclose(np.diag(res.correlation), 1.0)
+    coords = 3 if view == "3d" else 2
+    assert res.rmse_mm == pytest.approx(noise * np.sqrt(coords), rel=0.35)
+
+
+def test_calibration_recovers_torsional_rigidity(demonstrator):
+    rng = np.random.default_rng(21)
+    truth = {
+        "wire_torsion_scale": rng.uniform(2.0, 4.0),
+        "catheter_torsion_scale": rng.uniform(1.0, 3.0),
+    }
+    m = synthesize(demonstrator, ["torsion"], noise_mm=0.3, seed=21, params_override=truth)
+    res = calibrate(demonstrator, m, ["torsion"])
+    assert res.converged
+    for name, value in truth.items():
+        assert abs(res.estimate[name] - value) < 3 * res.standard_error[name], name
+        assert res.standard_error[name] < 0.3 * value
+
+
+def test_calibration_recovers_friction_from_an_ordered_path(demonstrator):
+    truth = {"wire_friction_angle": np.deg2rad(4.0), "catheter_friction_angle": np.deg2rad(2.0)}
+    m = synthesize(
+        demonstrator, ["hysteresis"], noise_mm=0.3, seed=4, view="top", params_override=truth
+    )
+    res = calibrate(demonstrator, m, ["hysteresis"])
+    assert res.converged
+    for name, value in truth.items():
+        assert abs(res.estimate[name] - value) < 3 * res.standard_error[name], name
+
+
+def test_ratio_of_remanence_and_rigidity_is_all_the_baseline_sees(demonstrator):
+    m = synthesize(
+        demonstrator, noise_mm=0.2, seed=2, params_override={"bending_rigidity_scale": 0.9}
+    )
+    free = ("bending_rigidity_scale", "external_remanence", "external_center_x")
+    res = calibrate(demonstrator, m, free=free)
+    assert "determine only 2 of 3" in res.message
+    with_priors = calibrate(demonstrator, m, free=free, priors=True)
+    assert with_priors.converged
+    # the prior (10 % on the remanence) is what pins the pair down
+    rel = (
+        with_priors.standard_error["external_remanence"]
+        / with_priors.estimate["external_remanence"]
+    )
+    assert 0.05 < rel < 0.11
+    assert all(np.isfinite(list(with_priors.standard_error.values())))
+
+
+def _planted_two_factors(demonstrator, ke, kb):
+    base = RingPairModel.parameters(demonstrator)
+    p = two_factor_parameters(base, ke, kb)
+    names = ("bending_rigidity_scale", "external_remanence")
+    names += tuple(f"external_center_{a}" for a in "xyz")
+    return synthesize(demonstrator, noise_mm=0.0, params_override={n: p[index(n)] for n in names})
+
+
+def test_grid_search_returns_planted_factors_on_its_grid(demonstrator):
+    ke, kb = PAPER_STIFFNESS_GRID[3], PAPER_FIELD_GRID[60]
+    grid = grid_search_two_factors(demonstrator, _planted_two_factors(demonstrator, ke, kb))
+    assert grid.objective.shape == (10, 101) and grid.evaluations == 1010
+    assert grid.stiffness_scale == ke and grid.field_scale == kb
+    assert grid.max_abs_mm < 1e-9
+
+
+def test_grid_search_between_nodes_is_as_good_as_its_resolution(demonstrator):
+    step_e = PAPER_STIFFNESS_GRID[1] - PAPER_STIFFNESS_GRID[0]
+    step_b = PAPER_FIELD_GRID[1] - PAPER_FIELD_GRID[0]
+    ke, kb = PAPER_STIFFNESS_GRID[3] + 0.3 * step_e, PAPER_FIELD_GRID[60] + 0.4 * step_b
+    m = _planted_two_factors(demonstrator, ke, kb)
+    grid = grid_search_two_factors(
+        demonstrator, m, field_grid=PAPER_FIELD_GRID[40:81], objective="rms"
+    )
+    assert abs(grid.stiffness_scale - ke) <= step_e
+    nearest = grid_search_two_factors(
+        demonstrator,
+        m,
+        stiffness_grid=PAPER_STIFFNESS_GRID[3:4],
+        field_grid=PAPER_FIELD_GRID[60:61],
+        objective="rms",
+    )
+    assert grid.rmse_mm <= nearest.rmse_mm  # never worse than the grid node nearest the truth
+    np.testing.assert_allclose(grid.errors.max() * 1e3, grid.max_abs_mm)
+
+
+def test_cross_validation_holds_out_whole_configurations(demonstrator):
+    m = synthesize(demonstrator, noise_mm=0.3, seed=8)  # the path visits each pair twice
+    folds = configuration_folds(m, 5, seed=1)
+    for a in range(len(m)):
+        same = np.all(m.command == m.command[a], axis=1)
+        assert (folds[same] == folds[a]).all()
+    np.testing.assert_array_equal(folds, configuration_folds(m, 5, seed=1))
+    cv = cross_validate(demonstrator, m, k=5, seed=1)
+    fit = calibrate(demonstrator, m)
+    assert cv.unconverged == 0 and np.isfinite(cv.fold_rmse_mm).all()
+    assert fit.rmse_mm < cv.rmse_mm < 1.5 * fit.rmse_mm
+
+
+def test_bad_free_parameters_are_named(demonstrator):
+    m = synthesize(demonstrator, n=6, noise_mm=0.1)
+    with pytest.raises(ValueError, match="cannot be calibrated"):
+        calibrate(demonstrator, m, free=["poisson"])
+    with pytest.raises(ValueError, match="distinct"):
+        calibrate(demonstrator, m, free=["tip_mass", "tip_mass"])
+    with pytest.raises(ValueError, match="between 2 and"):
+        configuration_folds(m, 1)
+
+
+def test_unused_import_guard():
+    assert len(default_commands(6)) >= 6 and synthesize_data is not None
