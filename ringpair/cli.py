@@ -551,6 +551,120 @@ def synth(
     console.print(f"wrote {out}/: design.toml, measurements.csv")
 
 
+def _measured_data(data: Path, design: Path | None):
+    """(Design, Measurements) from a data-set folder, or from a CSV with --design (default
+    the demonstrator); every problem with either file becomes a UserError."""
+    from optimize.measurements import MeasurementError, load_dataset, load_measurements
+
+    try:
+        if data.is_dir():
+            if design is not None:
+                raise UserError(
+                    f"--design is for a CSV; {data} is a data-set folder with its own design.toml"
+                )
+            return load_dataset(data)
+        return _design(design), load_measurements(data)
+    except (MeasurementError, DesignError) as exc:
+        raise UserError(str(exc)) from None
+
+
+@cli.command()
+@click.argument("data", type=click.Path(path_type=Path))
+@click.option(
+    "--design",
+    "design_path",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Design file for a CSV DATA (default: the demonstrator); a data-set folder has its own.",
+)
+@EFFECTS_OPTION
+@click.option(
+    "--free",
+    default=None,
+    help="Comma list of the parameters to fit. Default: bending_rigidity_scale and "
+    "external_center_x/y/z, plus each effect's own (torsion scales, friction angles, tip mass).",
+)
+@click.option("--priors", is_flag=True, help="Add Gaussian priors centred on the nominal design.")
+@click.option(
+    "--json",
+    "json_out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Also write the estimates, standard errors, correlations and errors as JSON (SI).",
+)
+def calibrate(
+    data: Path,
+    design_path: Path | None,
+    effects: str,
+    free: str | None,
+    priors: bool,
+    json_out: Path | None,
+) -> None:
+    """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
+    or a CSV, spec/formats.md) by least squares with exact Jacobians; print the estimates
+    with their standard errors, and the RMS and largest tip error."""
+    from optimize.calibrate import FREE_PARAMETERS
+    from optimize.calibrate import calibrate as fit_parameters
+
+    d, m = _measured_data(data, design_path)
+    model = _model(effects)
+    names = None if free is None else tuple(n.strip() for n in free.split(",") if n.strip())
+    for n in names or ():
+        if n not in FREE_PARAMETERS:
+            import difflib
+
+            close = difflib.get_close_matches(n, list(FREE_PARAMETERS), n=1, cutoff=0.6)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise UserError(
+                f"--free: {n!r} cannot be calibrated{hint} (expected names from "
+                f"{', '.join(FREE_PARAMETERS)})"
+            )
+    with console.status("fitting (the first run on a machine compiles the model)"):
+        try:
+            res = fit_parameters(d, m, model.effects, names, priors=priors)
+        except ValueError as exc:
+            raise UserError(str(exc)) from None
+    table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {len(m)} rows")
+    for col in ("parameter", "nominal", "estimate", "std. error", "unit"):
+        table.add_column(col, justify="right")
+    for row in res.table():
+        table.add_row(
+            str(row["name"]),
+            f"{row['nominal']:.5g}",
+            f"{row['estimate']:.5g}",
+            f"{row['standard_error']:.2g}",
+            str(row["unit"]),
+        )
+    console.print(table)
+    console.print(
+        f"tip error: RMS {res.rmse_mm:.3f} mm, largest {res.max_abs_mm:.3f} mm; implied noise "
+        f"{res.noise_mm:.3f} mm per coordinate; "
+        + ("converged" if res.converged else "[yellow]NOT converged[/]")
+        + f" ({res.evaluations} solves, {res.time_s:.2f} s)"
+    )
+    if res.at_bounds:
+        err_console.print(f"[yellow]warning:[/] at a bound: {', '.join(res.at_bounds)}")
+    if "determine only" in res.message:
+        err_console.print(f"[yellow]warning:[/] {escape(res.message)}")
+    if json_out is not None:
+        doc = {
+            "design": d.name,
+            "model": model.name,
+            "rows": len(m),
+            "estimate": res.estimate,
+            "standard_error": res.standard_error,
+            "nominal": res.nominal,
+            "correlation": np.round(res.correlation, 6).tolist(),
+            "rmse_mm": res.rmse_mm,
+            "max_abs_mm": res.max_abs_mm,
+            "noise_mm": res.noise_mm,
+            "converged": res.converged,
+            "message": res.message,
+        }
+        write_text(json_out, json.dumps(doc, indent=2) + "\n")
+        console.print(f"wrote {json_out}")
+
+
 @cli.command()
 @click.argument("design", required=False, type=click.Path(path_type=Path))
 @click.option(

@@ -166,3 +166,42 @@ def test_saving_data_the_reader_would_refuse_writes_nothing(tmp_path):
 def test_strings_parse_like_files():
     m = loads_measurements("theta1_deg, theta2_deg ,y_mm\n90,0,3\n", source="inline")
     assert m.command[0, 0] == pytest.approx(np.pi / 2) and np.isnan(m.position[0, 0])
+
+
+@pytest.mark.parametrize(("name", "text", "fragments"), BAD_FILES, ids=[b[0] for b in BAD_FILES])
+def test_bad_csv_on_the_command_line_exits_2_and_writes_nothing(tmp_path, name, text, fragments):
+    from click.testing import CliRunner
+
+    from ringpair.cli import cli
+
+    path = tmp_path / "data.csv"
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "fit.json"
+    result = CliRunner().invoke(
+        cli, ["calibrate", str(path), "--json", str(out)], catch_exceptions=False
+    )
+    assert result.exit_code == 2
+    assert "Traceback" not in result.output
+    for fragment in fragments:
+        assert fragment in result.output, result.output
+    assert not out.exists()
+
+
+def test_cli_data_set_folder_problems_exit_2(tmp_path, demonstrator):
+    from click.testing import CliRunner
+
+    from ringpair.cli import cli
+
+    def run(*args):
+        return CliRunner().invoke(cli, ["calibrate", *args], catch_exceptions=False)
+
+    assert "has no design.toml" in run(str(tmp_path)).output
+    folder = save_dataset(
+        tmp_path / "set", demonstrator, make_measurements([[0, 0]], [[0.15, 0, 0]])
+    )
+    result = run(str(folder), "--design", "x.toml")
+    assert result.exit_code == 2 and "--design is for a CSV" in result.output
+    result = run(str(folder), "--free", "bending_rigidity_scal")
+    assert result.exit_code == 2 and "did you mean 'bending_rigidity_scale'" in result.output
+    result = run(str(folder))  # one row, three coordinates: too few for four parameters
+    assert result.exit_code == 2 and "cannot determine 4 parameters" in result.output

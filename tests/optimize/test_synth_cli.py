@@ -3,6 +3,8 @@ message, no traceback, nothing written."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -72,3 +74,15 @@ def test_synth_bad_design_file(tmp_path):
     result = run("synth", str(bad), "--out", str(tmp_path / "set"))
     assert result.exit_code == 2 and "missing section" in result.output
     assert not (tmp_path / "set").exists()
+
+
+def test_calibrate_fits_a_synthetic_data_set(tmp_path):
+    out = tmp_path / "set"
+    truth = "bending_rigidity_scale=0.8"
+    assert run("synth", "--n", "24", "--set", truth, "--out", str(out)).exit_code == 0
+    result = run("calibrate", str(out), "--json", str(tmp_path / "fit.json"))
+    assert result.exit_code == 0, result.output
+    doc = json.loads((tmp_path / "fit.json").read_text())
+    est, se = doc["estimate"], doc["standard_error"]
+    assert abs(est["bending_rigidity_scale"] - 0.8) < 3 * se["bending_rigidity_scale"]
+    assert doc["converged"] and "tip error: RMS" in result.output
