@@ -2,13 +2,9 @@
 
 Nonlinear least squares (``scipy.optimize.least_squares``, trust region reflective, with
 bounds) on the position residuals weighted by their one-sigma uncertainty, with exact
-Jacobians from the CasADi model. At an equilibrium r(x, c, p) = 0 the implicit function
-theorem gives the unknowns' sensitivity dx/dp = -(dr/dx)^-1 dr/dp, and the tip position
-y(x, c, p) of ``model.pose`` moves as dy/dp = dy/dx dx/dp + dy/dp|_x; one compiled
-CasADi function (:func:`sensitivity_function`) returns both for a batch. With
-``hysteresis`` the commands reach the rings through the friction play, so the friction
-angles act through the commands: dy/dw = dy/dc dc/dw, with dc/dw from the same play
-operator on symbols (:func:`design.friction.play_step`).
+Jacobians from the CasADi model by the implicit function theorem at each equilibrium
+(:mod:`optimize.sensitivity`: dx/dp = -(dr/dx)^-1 dr/dp, through ``model.pose`` to the
+tip, and through the friction play for ``hysteresis``).
 
 Parameters are fitted in well-scaled units: scale factors, moduli and remanences by
 their logarithm (relative change), lengths in millimetres, angles in degrees, masses in
@@ -23,8 +19,9 @@ depends on the external remanence and the bending rigidity only through their ra
 (their correlation is reported as +-1 and the fit says so in ``message``).
 
 The paper's method (an exhaustive grid over a stiffness scale and a field scale) is kept
-as :func:`grid_search_two_factors`. SI units are used for all inputs and outputs; the
-``*_mm`` figures of the results are millimetres.
+as :func:`grid_search_two_factors` (:mod:`optimize.paper_grid`, re-exported here). SI
+units are used for all inputs and outputs; the ``*_mm`` figures of the results are
+millimetres.
 """
 
 from __future__ import annotations
@@ -32,19 +29,58 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 from scipy.optimize import least_squares
 
-from design.compiled import compile_function
-from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
-from design.friction import play, play_step
 from design.model import RingPairModel
-from design.parameters import NAMES, index
+from design.parameters import index
 from design.params import Design
 from optimize.measurements import Measurements
+from optimize.paper_grid import (
+    PAPER_FIELD_GRID,
+    PAPER_STIFFNESS_GRID,
+    GridResult,
+    grid_search_two_factors,
+    two_factor_parameters,
+)
+from optimize.sensitivity import (
+    SENSITIVE,
+    Prediction,
+    model_with,
+    position_errors,
+    predict,
+    prediction_sensitivities,
+    sensitivities,
+    sensitivity_function,
+)
+
+__all__ = [
+    "BASELINE_FREE",
+    "EFFECT_FREE",
+    "FREE_PARAMETERS",
+    "PAPER_FIELD_GRID",
+    "PAPER_STIFFNESS_GRID",
+    "SENSITIVE",
+    "CalibrationResult",
+    "CrossValidation",
+    "FreeParameter",
+    "GridResult",
+    "Prediction",
+    "calibrate",
+    "configuration_folds",
+    "cross_validate",
+    "default_free",
+    "grid_search_two_factors",
+    "model_with",
+    "position_errors",
+    "predict",
+    "prediction_sensitivities",
+    "row_sigma",
+    "sensitivities",
+    "sensitivity_function",
+    "two_factor_parameters",
+]
 
 MM = 1e-3
 DEG = np.pi / 180
@@ -53,7 +89,6 @@ DEFAULT_SIGMA = 1e-3
 estimated from the residuals). [m]"""
 TIP_ANGLE_SIGMA = np.deg2rad(3.0)
 """One-sigma uncertainty of measured tip angles when they are used. [rad]"""
-THREADS = 2
 
 
 @dataclass(frozen=True)
@@ -155,160 +190,6 @@ def _check_free(free: Sequence[str]) -> tuple[str, ...]:
     return free
 
 
-# ---------------------------------------------------------------------- sensitivities
-
-
-@lru_cache(maxsize=32)
-def model_with(effects: frozenset[str]) -> RingPairModel:
-    """One model object per set of effects, so its functions are built once per process."""
-    return RingPairModel(effects)
-
-
-SENSITIVE = tuple(FREE_PARAMETERS)
-"""Parameters whose derivatives :func:`sensitivity_function` returns, in this order."""
-
-
-@lru_cache(maxsize=16)
-def sensitivity_function(model: RingPairModel) -> ca.Function:
-    """Compiled (x, command, params) -> (out, d_out) at an equilibrium x of ``model``.
-
-    out : shape (5,), tip position (base frame) [m] and tip ring angles [rad].
-    d_out : shape (5, len(SENSITIVE) + 2), total derivatives of ``out`` along the
-        equilibrium, by the implicit function theorem, with respect to the parameters of
-        SENSITIVE [SI] and then the two commands [rad].
-    """
-    x = ca.SX.sym("x", model.n_unknowns)
-    command = ca.SX.sym("command", 2)
-    prm = ca.SX.sym("params", len(NAMES))
-    free = ca.vertcat(*[prm[index(n)] for n in SENSITIVE])
-    r, dr_dx = model.residual(x, command, prm)
-    position, _, angles = model.pose(x, command, prm)
-    out = ca.vertcat(position, angles)
-    direct = ca.horzcat(ca.jacobian(out, free), ca.jacobian(out, command))
-    dx = -ca.solve(dr_dx, ca.horzcat(ca.jacobian(r, free), ca.jacobian(r, command)))
-    d_out = direct + ca.jacobian(out, x) @ dx
-    fn = ca.Function(
-        "sensitivity",
-        [x, command, prm],
-        [out, d_out],
-        ["x", "command", "params"],
-        ["out", "d_out"],
-        {"cse": True},
-    )
-    return compile_function(fn)
-
-
-@lru_cache(maxsize=64)
-def _mapped_sensitivity(model: RingPairModel, size: int) -> ca.Function:
-    return sensitivity_function(model).map(size, "thread", THREADS)
-
-
-def sensitivities(
-    model: RingPairModel, params: np.ndarray, unknowns: np.ndarray, command: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Tip position and angles and their total derivatives for a batch of equilibria.
-
-    params : shape (n,). [SI]  unknowns : shape (N, n_unknowns), converged equilibria.
-    command : shape (N, 2), the commands the rings received (after any play). [rad]
-    Returns out (N, 5) [m, rad] and d_out (N, 5, len(SENSITIVE) + 2). [SI]
-    """
-    n = len(command)
-    k = len(SENSITIVE) + 2
-    if n == 0:
-        return np.zeros((0, 5)), np.zeros((0, 5, k))
-    fn = _mapped_sensitivity(model, n)
-    out, d_out = fn(unknowns.T, command.T, params)
-    out = np.asarray(out).T
-    d_out = np.asarray(d_out).reshape(5, n, k).transpose(1, 0, 2)
-    return out, d_out
-
-
-@lru_cache(maxsize=64)
-def _play_jacobian(n: int) -> ca.Function:
-    """(commands (2, n), half widths (2,)) -> d(ring angles)/d(half widths), (2n, 2),
-    rows in column-major order of the (2, n) angles."""
-    u = ca.SX.sym("u", 2, n)
-    w = ca.SX.sym("w", 2)
-    y = u[:, 0]
-    ys = [y]
-    for k in range(1, n):
-        y = play_step(y, u[:, k], w)
-        ys.append(y)
-    return ca.Function("play_jacobian", [u, w], [ca.jacobian(ca.vertcat(*ys), w)])
-
-
-# ------------------------------------------------------------------------- prediction
-
-
-@dataclass(frozen=True)
-class Prediction:
-    """The model's view of measured configurations, rows as in the measurements.
-
-    equilibria : the equilibria, row k for measurement k.
-    applied : shape (N, 2), the commands the rings received (after friction play). [rad]
-    dapplied_dfriction : shape (N, 2, 2) or None, d(applied)/d(wire, catheter friction
-        angle) along the path (hysteresis only). [-]
-    """
-
-    equilibria: Equilibria
-    applied: np.ndarray
-    dapplied_dfriction: np.ndarray | None
-
-
-def predict(
-    model: RingPairModel, params: np.ndarray, m: Measurements, ordered: bool | None = None
-) -> Prediction:
-    """Simulate the configurations of ``m`` with ``model`` and parameters ``params`` [SI].
-
-    ordered : drive the robot through the rows in acquisition order
-        (:meth:`Measurements.order`) with :func:`design.equilibrium.solve_sequence`, as the
-        bench did; default: only when the model has ``hysteresis``. Otherwise each
-        configuration is solved from the straight robot.
-    """
-    if ordered is None:
-        ordered = "hysteresis" in model.effects
-    params = np.asarray(params, float)
-    if not ordered:
-        eq = solve_equilibria(model, params, m.command[:, 0], m.command[:, 1])
-        return Prediction(eq, m.command.copy(), None)
-    order = m.order()
-    cmd = m.command[order]
-    eq_o = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
-    inverse = np.empty_like(order)
-    inverse[order] = np.arange(len(order))
-    eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
-    applied_o, d_o = cmd, None
-    if "hysteresis" in model.effects:
-        width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
-        applied_o = play(cmd.T, width).T
-        jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
-        d_o = jac.reshape(len(cmd), 2, 2)
-    return Prediction(eq, applied_o[inverse], None if d_o is None else d_o[inverse])
-
-
-def prediction_sensitivities(
-    model: RingPairModel, params: np.ndarray, pred: Prediction
-) -> tuple[np.ndarray, np.ndarray]:
-    """Tip position/angles (N, 5) and their derivatives (N, 5, len(SENSITIVE)) with
-    respect to the parameters of SENSITIVE, friction play included. Rows whose
-    equilibrium did not converge are NaN. [SI]"""
-    eq = pred.equilibria
-    n = len(eq)
-    out = np.full((n, 5), np.nan)
-    d_out = np.full((n, 5, len(SENSITIVE)), np.nan)
-    ok = np.flatnonzero(eq.converged)
-    if ok.size:
-        o, d = sensitivities(model, params, eq.unknowns[ok], pred.applied[ok])
-        dp = d[:, :, : len(SENSITIVE)].copy()
-        if pred.dapplied_dfriction is not None:
-            dc = d[:, :, len(SENSITIVE) :]
-            for j, name in enumerate(("wire_friction_angle", "catheter_friction_angle")):
-                col = SENSITIVE.index(name)
-                dp[:, :, col] += np.einsum("nij,nj->ni", dc, pred.dapplied_dfriction[ok, :, j])
-        out[ok], d_out[ok] = o, dp
-    return out, d_out
-
-
 # ------------------------------------------------------------------------ calibration
 
 
@@ -329,14 +210,6 @@ def row_sigma(m: Measurements, sigma: float | None = None) -> np.ndarray:
         fill = DEFAULT_SIGMA
     s[~given] = fill
     return s
-
-
-def position_errors(position: np.ndarray, m: Measurements) -> np.ndarray:
-    """Distance between model and measured tip over the measured coordinates, per row;
-    NaN where the model has no equilibrium. shape (N,) [m]"""
-    diff = np.where(m.measured, position - m.position, 0.0)
-    dist = np.sqrt(np.sum(diff**2, axis=1))
-    return np.where(np.isfinite(position).all(axis=1), dist, np.nan)
 
 
 @dataclass(frozen=True)
@@ -722,102 +595,5 @@ def cross_validate(
     )
 
 
-# ------------------------------------------------------------ the paper's grid search
-
-PAPER_STIFFNESS_GRID = np.linspace(2 / 3, 4 / 3, 10)
-"""The paper's K_E grid, 0.009 .. 0.018 in steps of 0.001 (10 values), relative to its
-centre 0.0135: a factor of 2 in 10 steps. Multiplied by ``stiffness_center``."""
-PAPER_FIELD_GRID = np.linspace(0.875, 1.125, 101)
-"""The paper's K_B grid, 3.5 .. 4.5 in steps of 0.01 (101 values), relative to its centre
-4.0: +-12.5 % in steps of 0.25 %. Multiplied by ``field_center``."""
-
-
-@dataclass(frozen=True)
-class GridResult:
-    """The paper's two-factor exhaustive search.
-
-    stiffness_scale, field_scale : the best grid point (K_E, K_B). [-]
-    objective : shape (len(stiffness_grid), len(field_grid)), the criterion at every grid
-        point (the paper's: largest distance); NaN where a configuration did not solve. [m]
-    params : shape (n,), model parameters at the best point. [SI]
-    errors : shape (N,), distances at the best point. [m]
-    rmse_mm, max_abs_mm : of ``errors``. [mm]
-    evaluations : model solves (one per grid point); time_s : wall time. [s]
-    """
-
-    stiffness_scale: float
-    field_scale: float
-    stiffness_grid: np.ndarray
-    field_grid: np.ndarray
-    objective: np.ndarray
-    params: np.ndarray
-    errors: np.ndarray
-    rmse_mm: float
-    max_abs_mm: float
-    evaluations: int
-    time_s: float
-
-
-def two_factor_parameters(base: np.ndarray, stiffness: float, field_scale: float) -> np.ndarray:
-    """The paper's parameterisation: K_E scales the bending rigidity; K_B scales the
-    external dipole's moment and its position (m_e' = K_B m_e, p_e' = K_B p_e, the
-    paper's eq. for the tuned field). [SI]"""
-    p = base.copy()
-    p[index("bending_rigidity_scale")] *= stiffness
-    p[index("external_remanence")] *= field_scale
-    for a in "xyz":
-        p[index(f"external_center_{a}")] *= field_scale
-    return p
-
-
-def grid_search_two_factors(
-    design: Design,
-    m: Measurements,
-    effects: Iterable[str] = (),
-    *,
-    stiffness_grid: np.ndarray | None = None,
-    field_grid: np.ndarray | None = None,
-    stiffness_center: float = 1.0,
-    field_center: float = 1.0,
-    objective: str = "max",
-    ordered: bool | None = None,
-) -> GridResult:
-    """The paper's calibration: an exhaustive search over a stiffness scale K_E and a
-    field scale K_B (:func:`two_factor_parameters`) minimising the largest tip error
-    (``objective='max'``, the paper's e_max) or the RMS error (``'rms'``). Default grid:
-    the paper's resolution (PAPER_STIFFNESS_GRID x PAPER_FIELD_GRID, 10 x 101 points)
-    around the given centres. Each grid point solves every configuration once."""
-    if objective not in ("max", "rms"):
-        raise ValueError(f"objective must be 'max' or 'rms'; got {objective!r}")
-    t0 = time.perf_counter()
-    model = model_with(frozenset(effects))
-    base = model.parameters(design)
-    ks = stiffness_center * (PAPER_STIFFNESS_GRID if stiffness_grid is None else stiffness_grid)
-    kb = field_center * (PAPER_FIELD_GRID if field_grid is None else field_grid)
-    table = np.full((len(ks), len(kb)), np.nan)
-    best: tuple[float, int, int, np.ndarray] = (np.inf, 0, 0, np.full(len(m), np.nan))
-    for i, ke in enumerate(ks):
-        for j, kf in enumerate(kb):
-            p = two_factor_parameters(base, ke, kf)
-            e = position_errors(predict(model, p, m, ordered).equilibria.position, m)
-            if not np.isfinite(e).all():
-                continue
-            value = float(e.max() if objective == "max" else np.sqrt(np.mean(e**2)))
-            table[i, j] = value
-            if value < best[0]:
-                best = (value, i, j, e)
-    _, i, j, e = best
-    ok = np.isfinite(e)
-    return GridResult(
-        stiffness_scale=float(ks[i]),
-        field_scale=float(kb[j]),
-        stiffness_grid=ks,
-        field_grid=kb,
-        objective=table,
-        params=two_factor_parameters(base, ks[i], kb[j]),
-        errors=e,
-        rmse_mm=float(np.sqrt(np.mean(e[ok] ** 2)) / MM) if ok.any() else float("nan"),
-        max_abs_mm=float(e[ok].max() / MM) if ok.any() else float("nan"),
-        evaluations=table.size,
-        time_s=time.perf_counter() - t0,
-    )
+if set(FREE_PARAMETERS) != set(SENSITIVE):  # pragma: no cover - a programming error
+    raise ImportError("FREE_PARAMETERS and optimize.sensitivity.SENSITIVE must name the same")

@@ -1,0 +1,207 @@
+"""Tip pose along the equilibrium and its exact derivatives: the implicit function theorem.
+
+At an equilibrium r(x, c, p) = 0 of :class:`design.model.RingPairModel` the unknowns move
+with the parameters as dx/dp = -(dr/dx)^-1 dr/dp, so the tip position and ring angles
+y(x, c, p) of ``model.pose`` move as dy/dp = dy/dx dx/dp + dy/dp|_x (and likewise with the
+commands c). One CasADi function, compiled once per model and mapped over a batch
+(:func:`sensitivity_function`), returns y and these total derivatives. With
+``hysteresis`` the commands reach the rings through the friction play, so the friction
+angles w act through the commands: dy/dw = dy/dc dc/dw, with dc/dw from the same play
+operator on symbols (:func:`design.friction.play_step`). SI units are used for all
+inputs and outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from design.compiled import compile_function
+from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
+from design.friction import play, play_step
+from design.model import RingPairModel
+from design.parameters import NAMES, index
+from optimize.measurements import Measurements
+
+THREADS = 2
+
+
+@lru_cache(maxsize=32)
+def model_with(effects: frozenset[str]) -> RingPairModel:
+    """One model object per set of effects, so its functions are built once per process."""
+    return RingPairModel(effects)
+
+
+SENSITIVE = (
+    "bending_rigidity_scale",
+    "wire_torsion_scale",
+    "catheter_torsion_scale",
+    "external_remanence",
+    "ring_remanence",
+    "catheter_youngs_modulus",
+    "wire_youngs_modulus",
+    "external_center_x",
+    "external_center_y",
+    "external_center_z",
+    "external_axis_x",
+    "external_axis_y",
+    "external_axis_z",
+    "free_length",
+    "wire_friction_angle",
+    "catheter_friction_angle",
+    "tip_mass",
+)
+"""Parameters whose derivatives :func:`sensitivity_function` returns, in this order (the
+ones calibration can free)."""
+
+
+@lru_cache(maxsize=16)
+def sensitivity_function(model: RingPairModel) -> ca.Function:
+    """Compiled (x, command, params) -> (out, d_out) at an equilibrium x of ``model``.
+
+    out : shape (5,), tip position (base frame) [m] and tip ring angles [rad].
+    d_out : shape (5, len(SENSITIVE) + 2), total derivatives of ``out`` along the
+        equilibrium, by the implicit function theorem, with respect to the parameters of
+        SENSITIVE [SI] and then the two commands [rad].
+    """
+    x = ca.SX.sym("x", model.n_unknowns)
+    command = ca.SX.sym("command", 2)
+    prm = ca.SX.sym("params", len(NAMES))
+    free = ca.vertcat(*[prm[index(n)] for n in SENSITIVE])
+    r, dr_dx = model.residual(x, command, prm)
+    position, _, angles = model.pose(x, command, prm)
+    out = ca.vertcat(position, angles)
+    direct = ca.horzcat(ca.jacobian(out, free), ca.jacobian(out, command))
+    dx = -ca.solve(dr_dx, ca.horzcat(ca.jacobian(r, free), ca.jacobian(r, command)))
+    d_out = direct + ca.jacobian(out, x) @ dx
+    fn = ca.Function(
+        "sensitivity",
+        [x, command, prm],
+        [out, d_out],
+        ["x", "command", "params"],
+        ["out", "d_out"],
+        {"cse": True},
+    )
+    return compile_function(fn)
+
+
+@lru_cache(maxsize=64)
+def _mapped_sensitivity(model: RingPairModel, size: int) -> ca.Function:
+    return sensitivity_function(model).map(size, "thread", THREADS)
+
+
+def sensitivities(
+    model: RingPairModel, params: np.ndarray, unknowns: np.ndarray, command: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tip position and angles and their total derivatives for a batch of equilibria.
+
+    params : shape (n,). [SI]  unknowns : shape (N, n_unknowns), converged equilibria.
+    command : shape (N, 2), the commands the rings received (after any play). [rad]
+    Returns out (N, 5) [m, rad] and d_out (N, 5, len(SENSITIVE) + 2). [SI]
+    """
+    n = len(command)
+    k = len(SENSITIVE) + 2
+    if n == 0:
+        return np.zeros((0, 5)), np.zeros((0, 5, k))
+    fn = _mapped_sensitivity(model, n)
+    out, d_out = fn(unknowns.T, command.T, params)
+    out = np.asarray(out).T
+    d_out = np.asarray(d_out).reshape(5, n, k).transpose(1, 0, 2)
+    return out, d_out
+
+
+@lru_cache(maxsize=64)
+def _play_jacobian(n: int) -> ca.Function:
+    """(commands (2, n), half widths (2,)) -> d(ring angles)/d(half widths), (2n, 2),
+    rows in column-major order of the (2, n) angles."""
+    u = ca.SX.sym("u", 2, n)
+    w = ca.SX.sym("w", 2)
+    y = u[:, 0]
+    ys = [y]
+    for k in range(1, n):
+        y = play_step(y, u[:, k], w)
+        ys.append(y)
+    return ca.Function("play_jacobian", [u, w], [ca.jacobian(ca.vertcat(*ys), w)])
+
+
+# ------------------------------------------------------------------------- prediction
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The model's view of measured configurations, rows as in the measurements.
+
+    equilibria : the equilibria, row k for measurement k.
+    applied : shape (N, 2), the commands the rings received (after friction play). [rad]
+    dapplied_dfriction : shape (N, 2, 2) or None, d(applied)/d(wire, catheter friction
+        angle) along the path (hysteresis only). [-]
+    """
+
+    equilibria: Equilibria
+    applied: np.ndarray
+    dapplied_dfriction: np.ndarray | None
+
+
+def predict(
+    model: RingPairModel, params: np.ndarray, m: Measurements, ordered: bool | None = None
+) -> Prediction:
+    """Simulate the configurations of ``m`` with ``model`` and parameters ``params`` [SI].
+
+    ordered : drive the robot through the rows in acquisition order
+        (:meth:`Measurements.order`) with :func:`design.equilibrium.solve_sequence`, as the
+        bench did; default: only when the model has ``hysteresis``. Otherwise each
+        configuration is solved from the straight robot.
+    """
+    if ordered is None:
+        ordered = "hysteresis" in model.effects
+    params = np.asarray(params, float)
+    if not ordered:
+        eq = solve_equilibria(model, params, m.command[:, 0], m.command[:, 1])
+        return Prediction(eq, m.command.copy(), None)
+    order = m.order()
+    cmd = m.command[order]
+    eq_o = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(len(order))
+    eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
+    applied_o, d_o = cmd, None
+    if "hysteresis" in model.effects:
+        width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
+        applied_o = play(cmd.T, width).T
+        jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
+        d_o = jac.reshape(len(cmd), 2, 2)
+    return Prediction(eq, applied_o[inverse], None if d_o is None else d_o[inverse])
+
+
+def prediction_sensitivities(
+    model: RingPairModel, params: np.ndarray, pred: Prediction
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tip position/angles (N, 5) and their derivatives (N, 5, len(SENSITIVE)) with
+    respect to the parameters of SENSITIVE, friction play included. Rows whose
+    equilibrium did not converge are NaN. [SI]"""
+    eq = pred.equilibria
+    n = len(eq)
+    out = np.full((n, 5), np.nan)
+    d_out = np.full((n, 5, len(SENSITIVE)), np.nan)
+    ok = np.flatnonzero(eq.converged)
+    if ok.size:
+        o, d = sensitivities(model, params, eq.unknowns[ok], pred.applied[ok])
+        dp = d[:, :, : len(SENSITIVE)].copy()
+        if pred.dapplied_dfriction is not None:
+            dc = d[:, :, len(SENSITIVE) :]
+            for j, name in enumerate(("wire_friction_angle", "catheter_friction_angle")):
+                col = SENSITIVE.index(name)
+                dp[:, :, col] += np.einsum("nij,nj->ni", dc, pred.dapplied_dfriction[ok, :, j])
+        out[ok], d_out[ok] = o, dp
+    return out, d_out
+
+
+def position_errors(position: np.ndarray, m: Measurements) -> np.ndarray:
+    """Distance between model and measured tip over the measured coordinates, per row;
+    NaN where the model has no equilibrium. shape (N,) [m]"""
+    diff = np.where(m.measured, position - m.position, 0.0)
+    dist = np.sqrt(np.sum(diff**2, axis=1))
+    return np.where(np.isfinite(position).all(axis=1), dist, np.nan)
