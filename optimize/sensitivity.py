@@ -27,6 +27,11 @@ from design.parameters import NAMES, index
 from optimize.measurements import Measurements
 
 THREADS = 2
+PATH_INDEPENDENT = frozenset({"hysteresis", "near_field", "gravity"})
+"""Effects under which the tip pose is a function of the rings' angles alone (linear rod,
+transmissions rigid in torsion, one equilibrium per pair of angles): along a path only the
+friction play depends on the order. With ``torsion`` (multistable rings) or
+``large_deflection`` the path itself is followed."""
 
 
 @lru_cache(maxsize=32)
@@ -151,9 +156,11 @@ def predict(
     """Simulate the configurations of ``m`` with ``model`` and parameters ``params`` [SI].
 
     ordered : drive the robot through the rows in acquisition order
-        (:meth:`Measurements.order`) with :func:`design.equilibrium.solve_sequence`, as the
-        bench did; default: only when the model has ``hysteresis``. Otherwise each
-        configuration is solved from the straight robot.
+        (:meth:`Measurements.order`) as the bench did, with
+        :func:`design.equilibrium.solve_sequence`; default: only when the model has
+        ``hysteresis``. Otherwise each configuration is solved from the straight robot.
+        For models in PATH_INDEPENDENT the order acts only through the friction play, so
+        the played commands are solved in one batch (the same equilibria, much faster).
     """
     if ordered is None:
         ordered = "hysteresis" in model.effects
@@ -163,16 +170,21 @@ def predict(
         return Prediction(eq, m.command.copy(), None)
     order = m.order()
     cmd = m.command[order]
-    eq_o = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
-    inverse = np.empty_like(order)
-    inverse[order] = np.arange(len(order))
-    eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
     applied_o, d_o = cmd, None
     if "hysteresis" in model.effects:
         width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
         applied_o = play(cmd.T, width).T
         jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
         d_o = jac.reshape(len(cmd), 2, 2)
+    if model.effects <= PATH_INDEPENDENT:
+        # the path acts only through the play: one batch solve of the rings' angles
+        eq_o = solve_equilibria(model, params, applied_o[:, 0], applied_o[:, 1])
+        eq_o = Equilibria(**{**eq_o.__dict__, "command": cmd.copy()})
+    else:
+        eq_o = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(len(order))
+    eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
     return Prediction(eq, applied_o[inverse], None if d_o is None else d_o[inverse])
 
 
