@@ -241,3 +241,20 @@ def test_bad_free_parameters_are_named(demonstrator):
 
 def test_unused_import_guard():
     assert len(default_commands(6)) >= 6 and synthesize_data is not None
+
+
+def test_path_through_the_play_equals_driving_the_robot(demonstrator):
+    """Without torsion the order acts only through the play: the batch shortcut of
+    ``predict`` gives the states of :func:`solve_sequence`, rows in any order."""
+    model = RingPairModel(frozenset({"hysteresis"}))
+    params = model.parameters(demonstrator)
+    params[index("wire_friction_angle")] = np.deg2rad(4.0)
+    params[index("catheter_friction_angle")] = np.deg2rad(2.0)
+    m = synthesize(demonstrator, n=24, noise_mm=0.0)
+    shuffled = m.subset(np.random.default_rng(0).permutation(len(m)))
+    pred = predict(model, params, shuffled)
+    driven = solve_sequence(model, params, m.command[:, 0], m.command[:, 1])
+    np.testing.assert_allclose(
+        pred.equilibria.position, driven.position[shuffled.sequence], atol=1e-12
+    )
+    np.testing.assert_allclose(pred.equilibria.command, shuffled.command)
