@@ -114,8 +114,10 @@ class FreeParameter:
     label: tuple[str, float] = ("", 1.0)
 
 
-def _log(name: str, lower: float, upper: float, prior: float, label: str = "") -> FreeParameter:
-    return FreeParameter(name, "log", lower, upper, prior, label=(label, 1.0))
+def _log(
+    name: str, lower: float, upper: float, prior: float, label: tuple[str, float] = ("", 1.0)
+) -> FreeParameter:
+    return FreeParameter(name, "log", lower, upper, prior, label=label)
 
 
 FREE_PARAMETERS: dict[str, FreeParameter] = {
@@ -124,10 +126,10 @@ FREE_PARAMETERS: dict[str, FreeParameter] = {
         _log("bending_rigidity_scale", 1e-3, 1e3, 0.5),
         _log("wire_torsion_scale", 1e-3, 1e3, 1.0),
         _log("catheter_torsion_scale", 1e-3, 1e3, 1.0),
-        _log("external_remanence", 0.05, 2.5, 0.1, "T"),
-        _log("ring_remanence", 0.05, 2.5, 0.1, "T"),
-        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, "MPa"),
-        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, "MPa"),
+        _log("external_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
+        _log("ring_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
+        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1e-6)),
+        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1e-6)),
         *(
             FreeParameter(f"external_center_{a}", "linear", -10.0, 10.0, 5.0, MM, 0.05, ("mm", 1e3))
             for a in "xyz"
@@ -217,8 +219,10 @@ class CalibrationResult:
     """A fitted model.
 
     names : the free parameters.
-    estimate, standard_error, nominal : by name. [SI]
-    correlation : shape (k, k), correlation of the estimates (Gauss-Newton).
+    estimate, standard_error, nominal : by name [SI]; the standard error is infinite for
+        parameters the data do not determine (see ``message``).
+    correlation : shape (k, k), correlation of the estimates (Gauss-Newton); NaN rows and
+        columns for undetermined parameters.
     params : shape (n,), full model parameter vector at the estimate. [SI]
     effects : the model's effects.
     residuals : shape (N, 3), measured - model tip position; NaN where not measured or
@@ -474,16 +478,27 @@ def calibrate(
     s2 = chi2 / dof
     jac = prob.jacobian(u)
     jtj = jac.T @ jac
-    cov_u = np.linalg.pinv(jtj) * s2
+    # Gauss-Newton covariance; along directions the data do not determine (eigenvalues of
+    # J^T J below 1e-10 of the largest) the parameters involved get an infinite error.
+    evals, evecs = np.linalg.eigh(jtj)
+    determined = evals > 1e-10 * max(evals.max(), 1e-300)
+    inv = evecs[:, determined] @ np.diag(1 / evals[determined]) @ evecs[:, determined].T
+    cov_u = inv * s2
     sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
+    undetermined = (np.abs(evecs[:, ~determined]) > 1e-3).any(axis=1)
+    sd_u[undetermined] = np.inf
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov_u / np.outer(sd_u, sd_u)
-    message = str(sol.message)
-    rank = np.linalg.matrix_rank(jtj, tol=1e-10 * max(np.abs(jtj).max(), 1e-300))
+    corr[undetermined, :] = np.nan
+    corr[:, undetermined] = np.nan
+    np.fill_diagonal(corr, 1.0)
+    message = str(sol.message).rstrip(".")
+    rank = int(determined.sum())
     if rank < len(names):
+        loose = ", ".join(n for n, u in zip(names, undetermined, strict=True) if u)
         message += (
             f"; the data determine only {rank} of {len(names)} parameter combinations "
-            "(correlated parameters: free fewer, or use priors)"
+            f"({loose} trade off against each other: free fewer, or use priors)"
         )
     dpdu = prob.dp_du(u)
     at_bounds = tuple(

@@ -647,14 +647,18 @@ def calibrate(
     if "determine only" in res.message:
         err_console.print(f"[yellow]warning:[/] {escape(res.message)}")
     if json_out is not None:
+
+        def finite(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None  # JSON has no inf or NaN
+
         doc = {
             "design": d.name,
             "model": model.name,
             "rows": len(m),
             "estimate": res.estimate,
-            "standard_error": res.standard_error,
+            "standard_error": {k: finite(v) for k, v in res.standard_error.items()},
             "nominal": res.nominal,
-            "correlation": np.round(res.correlation, 6).tolist(),
+            "correlation": [[finite(c) for c in row] for row in np.round(res.correlation, 6)],
             "rmse_mm": res.rmse_mm,
             "max_abs_mm": res.max_abs_mm,
             "noise_mm": res.noise_mm,
