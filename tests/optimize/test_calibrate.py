@@ -169,6 +169,8 @@ def test_ratio_of_remanence_and_rigidity_is_all_the_baseline_sees(demonstrator):
     free = ("bending_rigidity_scale", "external_remanence", "external_center_x")
     res = calibrate(demonstrator, m, free=free)
     assert "determine only 2 of 3" in res.message
+    assert np.isinf(res.standard_error["external_remanence"])
+    assert np.isinf(res.standard_error["bending_rigidity_scale"])
     with_priors = calibrate(demonstrator, m, free=free, priors=True)
     assert with_priors.converged
     # the prior (10 % on the remanence) is what pins the pair down
