@@ -27,6 +27,10 @@ from design.parameters import NAMES, index
 from optimize.measurements import Measurements
 
 THREADS = 2
+COMPILE_LIMIT = 12000
+"""Sensitivity functions up to this many operations are compiled to C (seconds, once per
+machine); larger ones (the exact cylinder field: ~23,000, about 25 s to compile) run in
+CasADi's virtual machine, about 10 ms per batch of 60 configurations."""
 PATH_INDEPENDENT = frozenset({"hysteresis", "near_field", "gravity"})
 """Effects under which the tip pose is a function of the rings' angles alone (linear rod,
 transmissions rigid in torsion, one equilibrium per pair of angles): along a path only the
@@ -65,7 +69,8 @@ ones calibration can free)."""
 
 @lru_cache(maxsize=16)
 def sensitivity_function(model: RingPairModel) -> ca.Function:
-    """Compiled (x, command, params) -> (out, d_out) at an equilibrium x of ``model``.
+    """(x, command, params) -> (out, d_out) at an equilibrium x of ``model``, compiled
+    when small enough (COMPILE_LIMIT).
 
     out : shape (5,), tip position (base frame) [m] and tip ring angles [rad].
     d_out : shape (5, len(SENSITIVE) + 2), total derivatives of ``out`` along the
@@ -90,6 +95,8 @@ def sensitivity_function(model: RingPairModel) -> ca.Function:
         ["out", "d_out"],
         {"cse": True},
     )
+    if fn.n_instructions() > COMPILE_LIMIT:
+        return fn
     return compile_function(fn)
 
 
