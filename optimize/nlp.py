@@ -288,8 +288,15 @@ def core(structure: Structure) -> Core:
 
 @dataclass(frozen=True)
 class Problem:
-    """The NLP of a structure: ``solver`` (IPOPT) and, lazily, the minimum-violation
-    problem ``restoration``. Parameter layout: see :func:`_nlp_parameters`."""
+    """The NLP of a structure and its IPOPT ``solver``.
+
+    Variables: (z (n_free), x~ (n x (K + 2 K_n), column-major), rho~, t). Parameters:
+    (model parameter vector P, unknown scales xs (n), lower and upper bounds of the free
+    quantities, objective norms (disc, area, 1), area orientation sign, objective weights
+    (disc, area, reach ratio), deflection scale). Constraints: equilibria (scaled by xs),
+    epigraph rows, then the constraint groups' rows (Core.rows, then min_disc_radius and
+    min_reach_ratio), each divided by its group's file-unit scale (``row_scale``).
+    """
 
     core: Core
     solver: ca.Function
@@ -453,8 +460,8 @@ def design_with(
 
 def material_combinations(study: Study) -> list[tuple[Material | None, Material | None]]:
     """Every (catheter, wire) material pair of the study (None keeps the base tube)."""
-    cat = [material(m) for m in study.catheter_materials] or [None]
-    wire = [material(m) for m in study.wire_materials] or [None]
+    cat: list[Material | None] = [material(m) for m in study.catheter_materials] or [None]
+    wire: list[Material | None] = [material(m) for m in study.wire_materials] or [None]
     return list(itertools.product(cat, wire))
 
 

@@ -19,8 +19,8 @@ from design.ring_coupling import coupling_coefficient, coupling_torques
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import sweep_workspace
 from optimize.materials import material
-from optimize.nlp import evaluate_design, solve_study
-from optimize.study import loads_study
+from optimize.nlp import evaluate_design, pareto_values, solve_study
+from optimize.study import default_study, loads_study
 
 L_MM = 150.0
 BETA = math.radians(45.0)
@@ -111,6 +111,25 @@ def test_epsilon_bound_moves_the_optimum_onto_it(known_study):
     assert "epsilon.external_distance" in result.active
     back = pickle.loads(pickle.dumps(result))
     assert back.values == result.values and back.design == result.design
+
+
+def test_pareto_front_against_magnet_distance_is_monotone(known_study):
+    # Requiring the magnet farther away can only cost disc radius; below d* it is free.
+    eps = [0.12, 0.15, 0.2, 0.3]
+    radius = [solve_study(known_study, epsilon={"external_distance": e}).objective for e in eps]
+    free = solve_study(known_study).objective
+    assert radius[0] == pytest.approx(free, rel=1e-9)
+    assert all(a > b for a, b in zip(radius, radius[1:], strict=False))
+
+
+def test_pareto_values_span_the_free_bounds():
+    study = default_study()
+    od, dist, vol = (pareto_values(study, p) for p in study.pareto)
+    assert od[0] == pytest.approx(1.2e-3) and od[-1] == pytest.approx(2.5e-3)
+    assert dist[0] == pytest.approx(0.060) and dist[-1] == pytest.approx(0.200)
+    # Both rings, 4 mm OD, 0.5 mm bore, 3 mm long at most. [m^3]
+    assert vol[-1] == pytest.approx(2 * math.pi / 4 * (4e-3**2 - 0.5e-3**2) * 3e-3)
+    assert len(od) == study.pareto[0].points
 
 
 def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
