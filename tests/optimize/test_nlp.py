@@ -15,6 +15,7 @@ import tomli_w
 from design.constants import MU0
 from design.designfile import default_design, design_to_dict, load_design, save_design
 from design.equilibrium import solve_design
+from design.model import RingPairModel
 from design.ring_coupling import coupling_coefficient, coupling_torques
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import sweep_workspace
@@ -323,3 +324,19 @@ starts = 2
     report = result.report()
     assert "INFEASIBLE" in report
     assert "ring_on_wire (ring bore minus wire OD) misses its limit 0.5 mm by 0.3 mm" in report
+
+
+def test_torsion_study_optimum_holds_in_forward_simulation():
+    # With the torsion effect the twist is the solved tip-angle lag itself.
+    study = loads_study(SMALL.replace('objective = "disc_radius"', 'effects = "torsion"'))
+    result = solve_study(study)
+    assert result.feasible, result.report()
+    model = RingPairModel(study.effects)
+    ws = sweep_workspace(result.design, np.deg2rad(15.0), model=model)
+    assert ws.n_unconverged == 0 and ws.n_unstable == 0
+    assert ws.disc_radius == pytest.approx(result.objective, rel=1e-4)
+    phi = np.deg2rad(np.arange(0.0, 360.0, 15.0))
+    for t1 in (phi, phi + np.pi / 2, phi + np.pi):
+        eq = solve_design(result.design, t1, phi, model=model)
+        lag = np.angle(np.exp(1j * (eq.tip_angles - eq.command)))
+        assert np.abs(lag).max() <= study.limits.twist_limit * (1 + 1e-3)
