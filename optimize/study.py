@@ -60,7 +60,8 @@ stable = true                             # reject optima with unstable sampled 
 starts = 4                                # start 1 is the base design, others random
 seed = 0                                  # random starts are reproducible
 configurations = 24                       # K parallel-ring directions (the boundary)
-neutral_configurations = 8                # antiparallel directions (neutral check)
+neutral_configurations = 8                # antiparallel directions (neutral check), and
+                                          # as many with the rings at right angles (twist)
 max_iterations = 300                      # IPOPT iterations per start
 tolerance = 1e-8                          # IPOPT tolerance (scaled problem)
 hessian = "limited-memory"                # L-BFGS from the exact gradients (fast), or
