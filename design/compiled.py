@@ -17,6 +17,8 @@ import warnings
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
 
 CFLAGS = ("-O2", "-shared", "-fPIC")
 _loaded: dict[str, ca.Function] = {}
@@ -80,3 +82,27 @@ def compile_function(function: ca.Function) -> ca.Function:
     compiled = ca.external(name, str(target))
     _loaded[key] = compiled
     return compiled
+
+
+class BufferEvaluator:
+    """Calls a CasADi function on float64 buffers (no DM conversions, which cost more than
+    a compiled evaluation of the rod)."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self.function = function
+        self.buffer, self.trigger = function.buffer()
+        self.args = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+        self.outs = [np.zeros(function.nnz_out(i)) for i in range(function.n_out())]
+        for i, a in enumerate(self.args):
+            self.buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
+        for i, o in enumerate(self.outs):
+            self.buffer.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
+
+    def __call__(self, *args: ArrayLike) -> list[np.ndarray]:
+        for buf, a in zip(self.args, args, strict=True):
+            buf[:] = np.ravel(np.asarray(a, dtype=float), order="F")
+        self.trigger()
+        return [
+            o.reshape(self.function.size2_out(i), self.function.size1_out(i)).T.copy()
+            for i, o in enumerate(self.outs)
+        ]

@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from design.compiled import compile_function
+from design.compiled import BufferEvaluator, compile_function
 from design.friction import play
 from design.model import RingPairModel
 from design.parameters import index
@@ -262,12 +262,12 @@ def solve_sequence(
             [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
         )
         effective = play(command, width)
-    solver = newton_function(model)
+    solver = BufferEvaluator(newton_function(model))
 
     def solve(x0: np.ndarray, c: np.ndarray) -> list[np.ndarray]:
-        return [np.asarray(o).ravel() for o in solver(x0, c, params)]
+        return [o.ravel() for o in solver(x0, c, params)]
 
-    residual = compile_function(model.residual)
+    residual = BufferEvaluator(compile_function(model.residual))
 
     def settle(x: np.ndarray, c: np.ndarray) -> list[np.ndarray] | None:
         """The stable state a real robot falls into from an unstable or lost one: from small
@@ -281,7 +281,7 @@ def solve_sequence(
                 xr = x.copy()
                 xr[i] += sign * step
                 for _ in range(SETTLE_RELAXATION):
-                    xr = xr - 0.5 * np.asarray(residual(xr, c, params)[0]).ravel()
+                    xr = xr - 0.5 * residual(xr, c, params)[0].ravel()
                 if not np.isfinite(xr).all():
                     continue
                 out = solve(xr, c)

@@ -63,7 +63,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from design.compiled import compile_function
+from design.compiled import BufferEvaluator, compile_function
 
 STEPS = 20
 """Runge-Kutta steps along the rod (see the module docstring for the convergence)."""
@@ -300,30 +300,6 @@ class RodSolution:
     iterations: int
 
 
-class _Evaluator:
-    """Calls a CasADi function on float64 buffers (no DM conversions, which cost more than
-    a compiled evaluation of the rod)."""
-
-    def __init__(self, function: ca.Function) -> None:
-        self.function = function
-        self.buffer, self.trigger = function.buffer()
-        self.args = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
-        self.outs = [np.zeros(function.nnz_out(i)) for i in range(function.n_out())]
-        for i, a in enumerate(self.args):
-            self.buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
-        for i, o in enumerate(self.outs):
-            self.buffer.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
-
-    def __call__(self, *args: ArrayLike) -> list[np.ndarray]:
-        for buf, a in zip(self.args, args, strict=True):
-            buf[:] = np.ravel(np.asarray(a, dtype=float), order="F")
-        self.trigger()
-        return [
-            o.reshape(self.function.size2_out(i), self.function.size1_out(i)).T.copy()
-            for i, o in enumerate(self.outs)
-        ]
-
-
 class ShootingSolver:
     """Numeric Newton solver of the rod's boundary value problem, for tests, benchmarks and
     single configurations (the model's batch equilibrium uses :func:`boundary_residual`).
@@ -382,9 +358,9 @@ class ShootingSolver:
         )
         if compile:
             residual, straight, shape = (compile_function(fn) for fn in (residual, straight, shape))
-        self._residual = _Evaluator(residual)
-        self._straight = _Evaluator(straight)
-        self._shape = _Evaluator(shape)
+        self._residual = BufferEvaluator(residual)
+        self._straight = BufferEvaluator(straight)
+        self._shape = BufferEvaluator(shape)
 
     def _newton(
         self, z: np.ndarray, params: tuple[Any, ...], tolerance: float, max_iterations: int
