@@ -1,0 +1,454 @@
+"""Diagnosis: what the simulation gets wrong on measured data, the physical cause, and the gain.
+
+Method (the result format is spec/formats.md's diagnosis JSON):
+
+1. Calibrate the baseline (:func:`optimize.calibrate.calibrate`, its default free
+   parameters) and cross-validate it over held-out configurations.
+2. Look for structure in its residuals: regress them on smooth functions of each candidate
+   cause's signature (each ring angle and their difference as two-harmonic Fourier series,
+   the deflection and the distance to the external magnet as quadratics, the acquisition
+   order as a cubic, the direction of travel as a sign) and F-test each against the
+   residual noise (:func:`residual_structure`).
+3. Greedy forward selection: fit every candidate effect added to the current model (its
+   own parameters freed, :data:`optimize.calibrate.EFFECT_FREE`); take the candidates in
+   order of the Bayesian information criterion, n ln(RSS'/RSS) + k' ln n, and accept the
+   first whose BIC falls by more than BIC_DROP (very strong evidence, Kass & Raftery 1995)
+   and whose cross-validated RMSE falls by more than CV_GAIN; repeat while one is accepted
+   and the residual is not yet consistent with the stated noise (chi-square test, when the
+   data give sigma).
+4. Name each accepted cause with its evidence (the residual structure it removes, the
+   fitted parameters, the cross-validated gain), and say whether structure remains.
+
+The candidates are only ever judged through the data: the same fits, the same thresholds
+for each. SI units inside; the ``*_mm`` figures are millimetres.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from design.model import EFFECTS
+from design.params import Design
+from optimize.calibrate import (
+    EFFECT_FREE,
+    FREE_PARAMETERS,
+    CalibrationResult,
+    calibrate,
+    cross_validate,
+    default_free,
+    model_with,
+    predict,
+    row_sigma,
+)
+from optimize.measurements import Measurements
+
+MM = 1e-3
+BIC_DROP = 10.0
+"""Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
+strong evidence)."""
+CV_GAIN = 0.03
+"""... and its cross-validated RMSE falls by more than this fraction."""
+STRUCTURE_P = 1e-3
+"""A residual dependence on a feature is reported as structure below this p-value."""
+NOISE_P = 1e-3
+"""With stated sigmas, residuals whose chi-square p-value is above this are noise."""
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Structure:
+    """Residual dependence on one feature.
+
+    feature : what the residuals were regressed on. r2 : fraction of the residual variance
+    the regression explains. p_value : F-test of the regression against pure noise.
+    """
+
+    feature: str
+    r2: float
+    p_value: float
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One calibrated model with its cross-validated error."""
+
+    effects: frozenset[str]
+    calibration: CalibrationResult
+    cv_rmse_mm: float
+    rss: float
+    n: int
+
+    @property
+    def name(self) -> str:
+        return "+".join(sorted(self.effects)) or "baseline"
+
+    def bic(self) -> float:
+        """n ln(RSS / n) + k ln n over the measured coordinates. [-]"""
+        k = len(self.calibration.names)
+        return self.n * math.log(self.rss / self.n) + k * math.log(self.n)
+
+    def summary(self) -> dict[str, object]:
+        """The spec's model block: rmse_mm, max_abs_mm, cv_rmse_mm, params (report units)."""
+        return {
+            "effects": sorted(self.effects),
+            "rmse_mm": self.calibration.rmse_mm,
+            "max_abs_mm": self.calibration.max_abs_mm,
+            "cv_rmse_mm": self.cv_rmse_mm,
+            "params": parameter_values(self.calibration),
+            "uncertainty": parameter_values(self.calibration, standard_error=True),
+        }
+
+
+@dataclass(frozen=True)
+class Cause:
+    """An accepted effect: its fit, the structure it removed and one sentence of evidence."""
+
+    name: str
+    fit: Fit
+    params: dict[str, float]
+    evidence: str
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """What the data say about the model (spec/formats.md, diagnosis result).
+
+    baseline, final : the calibrated baseline and the selected model.
+    causes : accepted effects, in the order they were added (strongest first).
+    structure_before, structure_after : residual structure of the baseline and the final
+        model, strongest first.
+    unexplained : the final residual still shows structure (or exceeds the stated noise)
+        that no candidate explains.
+    candidates : every fit tried: effect set -> (BIC, cross-validated RMSE or NaN). [-, mm]
+    time_s : wall time. [s]
+    """
+
+    baseline: Fit
+    final: Fit
+    causes: tuple[Cause, ...]
+    structure_before: tuple[Structure, ...]
+    structure_after: tuple[Structure, ...]
+    unexplained: str
+    candidates: dict[str, tuple[float, float]] = field(default_factory=dict)
+    time_s: float = 0.0
+
+    def to_json(self) -> dict[str, object]:
+        """The diagnosis JSON of spec/formats.md, with optional extra keys."""
+        base, final = self.baseline.summary(), self.final.summary()
+        ratio = self.final.cv_rmse_mm / self.baseline.cv_rmse_mm
+        return {
+            "baseline": base,
+            "causes": [
+                {
+                    "name": c.name,
+                    "params": c.params,
+                    "cv_rmse_mm": c.fit.cv_rmse_mm,
+                    "evidence": c.evidence,
+                }
+                for c in self.causes
+            ],
+            "final": final,
+            "gain": {
+                "cv_rmse_ratio": ratio,
+                "rmse_ratio": self.final.calibration.rmse_mm / self.baseline.calibration.rmse_mm,
+                "max_abs_ratio": self.final.calibration.max_abs_mm
+                / self.baseline.calibration.max_abs_mm,
+            },
+            "unexplained": self.unexplained,
+            "structure": {
+                "baseline": [s.__dict__ for s in self.structure_before],
+                "final": [s.__dict__ for s in self.structure_after],
+            },
+            "candidates": {
+                k: {"bic": b, "cv_rmse_mm": None if math.isnan(c) else c}
+                for k, (b, c) in self.candidates.items()
+            },
+            "time_s": self.time_s,
+        }
+
+
+def parameter_values(fit: CalibrationResult, standard_error: bool = False) -> dict[str, float]:
+    """Fitted parameters in report units, keyed ``name`` or ``name_<unit>`` (mm, deg, g...)."""
+    values = fit.standard_error if standard_error else fit.estimate
+    out = {}
+    for name in fit.names:
+        label, factor = FREE_PARAMETERS[name].label
+        key = f"{name}_{label.lower()}" if label else name
+        out[key] = float(values[name] * factor)
+    return out
+
+
+# ------------------------------------------------------------------- residual structure
+
+
+def _fourier(angle: np.ndarray, harmonics: int = 2) -> list[np.ndarray]:
+    return [f(h * angle) for h in range(1, harmonics + 1) for f in (np.cos, np.sin)]
+
+
+def _poly(x: np.ndarray, degree: int) -> list[np.ndarray]:
+    span = np.ptp(x) if np.ptp(x) > 0 else 1.0
+    z = (x - x.mean()) / span
+    return [z**d for d in range(1, degree + 1)]
+
+
+def features(design: Design, m: Measurements, model_position: np.ndarray) -> dict[str, np.ndarray]:
+    """Candidate signatures, each a design matrix without intercept, shape (N, k).
+
+    model_position : shape (N, 3), the fitted model's tip positions (for the deflection and
+    the distance to the external magnet). [m]
+    """
+    t1, t2 = m.command[:, 0], m.command[:, 1]
+    rest = np.array([design.robot.free_length, 0.0, 0.0])
+    centre = np.asarray(design.external_magnet.center)
+    order = np.empty(len(m))
+    order[m.order()] = np.arange(len(m))
+    travel = np.zeros((len(m), 2))
+    seq = m.order()
+    step = np.diff(m.command[seq], axis=0)
+    travel[seq[1:]] = np.sign(step)
+    out = {
+        "theta1": _fourier(t1),
+        "theta2": _fourier(t2),
+        "theta1 - theta2": _fourier(t1 - t2),
+        "deflection": _poly(np.linalg.norm(model_position - rest, axis=1), 2),
+        "distance to the external magnet": _poly(
+            np.linalg.norm(model_position - centre, axis=1), 2
+        ),
+        "acquisition order": _poly(order, 3),
+        "direction of travel": [travel[:, 0], travel[:, 1]],
+    }
+    return {k: np.column_stack(v) for k, v in out.items() if np.ptp(np.column_stack(v)) > 0}
+
+
+def residual_structure(
+    residuals: np.ndarray, feature_matrices: dict[str, np.ndarray]
+) -> tuple[Structure, ...]:
+    """F-test of the residuals (N, 3; NaN where not measured) against each feature: each
+    measured component is regressed on the feature's columns plus an intercept, and the
+    sums of squares are pooled over components. Strongest (smallest p) first."""
+    out = []
+    for name, x in feature_matrices.items():
+        rss0 = rss1 = 0.0
+        df1 = df2 = 0
+        for c in range(3):
+            ok = np.isfinite(residuals[:, c])
+            if ok.sum() < x.shape[1] + 3:
+                continue
+            y = residuals[ok, c]
+            a = np.column_stack([np.ones(ok.sum()), x[ok]])
+            coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+            rank = np.linalg.matrix_rank(a)
+            rss0 += float(np.sum((y - y.mean()) ** 2))
+            rss1 += float(np.sum((y - a @ coef) ** 2))
+            df1 += rank - 1
+            df2 += ok.sum() - rank
+        if df1 == 0 or df2 == 0 or rss0 == 0:
+            continue
+        f = ((rss0 - rss1) / df1) / max(rss1 / df2, 1e-300)
+        out.append(Structure(name, 1 - rss1 / rss0, float(stats.f.sf(f, df1, df2))))
+    return tuple(sorted(out, key=lambda s: s.p_value))
+
+
+# ------------------------------------------------------------------------------ fitting
+
+
+def _ordered(effects: Iterable[str]) -> bool:
+    """Solve along the acquisition path when the state depends on it: friction play, and
+    the multistable twist of coupled rings."""
+    return bool({"hysteresis", "torsion"} & set(effects))
+
+
+def _fit(
+    design: Design,
+    m: Measurements,
+    effects: frozenset[str],
+    *,
+    k: int,
+    seed: int,
+    cv: bool,
+    start: CalibrationResult | None,
+    sigma: float | None,
+) -> Fit:
+    free = default_free(effects)
+    options: dict[str, object] = {"ordered": "hysteresis" in effects, "sigma": sigma}
+    # From the nominal design and, if given, from the previous model's estimates (the
+    # previous model may have bent its parameters to mimic this effect): the better fit.
+    starts: list[dict[str, float] | None] = [None]
+    if start is not None:
+        starts.append({n: v for n, v in start.estimate.items() if n in free})
+    fits = [calibrate(design, m, effects, free, initial=s, **options) for s in starts]  # type: ignore[arg-type]
+    cal = min(fits, key=lambda c: c.chi2 if c.unconverged == 0 else math.inf)
+    initial = {n: cal.estimate[n] for n in free}
+    if _ordered(effects) and not options["ordered"]:
+        # Twisting transmissions can make the robot multistable; then the state depends
+        # on the path driven. Solving each configuration on its own is exact (and much
+        # faster) when the driven path ends in the same states; otherwise refit along it.
+        model = model_with(effects)
+        alone = predict(model, cal.params, m, ordered=False).equilibria.position
+        driven = predict(model, cal.params, m, ordered=True).equilibria.position
+        if not np.nanmax(np.abs(alone - driven), initial=0.0) < 1e-6:
+            options["ordered"] = True
+            cal = calibrate(design, m, effects, free, initial=initial, **options)  # type: ignore[arg-type]
+    e = cal.errors[np.isfinite(cal.errors)]
+    n = int(m.measured.sum())
+    rss = float(np.nansum(cal.residuals**2))
+    if e.size < len(m):  # unsolved rows count as a miss of the whole deflection
+        rss = math.inf
+    cv_rmse = math.nan
+    if cv:
+        cv_rmse = cross_validate(
+            design, m, effects, free, k=k, seed=seed, initial=initial, **options
+        ).rmse_mm
+    return Fit(effects, cal, cv_rmse, rss, n)
+
+
+def _with_cv(
+    design: Design, m: Measurements, fit: Fit, k: int, seed: int, sigma: float | None
+) -> Fit:
+    return _fit(design, m, fit.effects, k=k, seed=seed, cv=True, start=fit.calibration, sigma=sigma)
+
+
+def _noise_consistent(fit: Fit, m: Measurements) -> bool:
+    """With stated sigmas: the weighted residual is consistent with them (chi-square)."""
+    if not np.isfinite(m.sigma).any():
+        return False
+    return bool(stats.chi2.sf(fit.calibration.chi2, fit.calibration.dof) > NOISE_P)
+
+
+def _evidence(
+    name: str, before: Fit, after: Fit, s0: Sequence[Structure], s1: Sequence[Structure]
+) -> str:
+    r2_after = {s.feature: s.r2 for s in s1}
+    drops = [(s.r2 - r2_after.get(s.feature, 0.0), s) for s in s0 if s.p_value < STRUCTURE_P]
+    own = parameter_values(after.calibration)
+    se = parameter_values(after.calibration, standard_error=True)
+    shown = [k for k in own if any(k.startswith(p) for p in EFFECT_FREE[name])]
+    params = ", ".join(f"{k} = {own[k]:.4g} +- {se[k]:.2g}" for k in shown)
+    text = f"{name}: "
+    if drops:
+        drop, s = max(drops, key=lambda t: t[0])
+        text += (
+            f"the residuals' dependence on {s.feature} (R^2 {s.r2:.2f} -> "
+            f"{r2_after.get(s.feature, 0.0):.2f}) goes away"
+        )
+    else:
+        text += "the residuals shrink without a single dominant pattern"
+    text += (
+        f" and the cross-validated RMSE falls from {before.cv_rmse_mm:.3g} to "
+        f"{after.cv_rmse_mm:.3g} mm (BIC {after.bic() - before.bic():+.0f})"
+    )
+    if params:
+        text += f", with {params}"
+    return text + "."
+
+
+def diagnose(
+    design: Design,
+    m: Measurements,
+    candidates: Iterable[str] = EFFECTS,
+    *,
+    k: int = 5,
+    seed: int = 0,
+    sigma: float | None = None,
+    progress: Progress | None = None,
+) -> Diagnosis:
+    """Find which model effects the measurements ``m`` of ``design`` call for.
+
+    candidates : effects to test (names of :data:`design.model.EFFECTS`).
+    k : folds of the cross-validation over configurations. seed : its shuffling.
+    sigma : one-sigma position noise for rows that do not state one. [m]
+    progress : called with a short message before each fit.
+    """
+    t0 = time.perf_counter()
+    say = progress or (lambda _: None)
+    candidates = [c for c in EFFECTS if c in set(candidates)]
+    if "hysteresis" in candidates and m.sequence is None:
+        candidates.remove("hysteresis")  # needs the order of acquisition
+    row_sigma(m, sigma)
+    say("baseline")
+    current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, start=None, sigma=sigma)
+    baseline = current
+
+    def structure(fit: Fit) -> tuple[Structure, ...]:
+        model = model_with(fit.effects)
+        ordered = _ordered(fit.effects)
+        position = predict(model, fit.calibration.params, m, ordered).equilibria.position
+        position = np.where(np.isfinite(position), position, m.position)
+        return residual_structure(fit.calibration.residuals, features(design, m, position))
+
+    s_base = structure(baseline)
+    s_current = s_base
+    causes: list[Cause] = []
+    tried: dict[str, tuple[float, float]] = {baseline.name: (baseline.bic(), baseline.cv_rmse_mm)}
+    remaining = list(candidates)
+    while remaining and not _noise_consistent(current, m):
+        fits = []
+        for name in remaining:
+            say(f"testing {name} on top of {current.name}")
+            f = _fit(
+                design,
+                m,
+                current.effects | {name},
+                k=k,
+                seed=seed,
+                cv=False,
+                start=current.calibration,
+                sigma=sigma,
+            )
+            tried[f.name] = (f.bic(), math.nan)
+            fits.append((f.bic() - current.bic(), name, f))
+        accepted = None
+        for drop, name, f in sorted(fits, key=lambda t: t[0]):
+            if not drop < -BIC_DROP:
+                break
+            say(f"cross-validating {f.name}")
+            f = _with_cv(design, m, f, k, seed, sigma)
+            tried[f.name] = (f.bic(), f.cv_rmse_mm)
+            if f.cv_rmse_mm < (1 - CV_GAIN) * current.cv_rmse_mm:
+                accepted = (name, f)
+                break
+        if accepted is None:
+            break
+        name, f = accepted
+        s_new = structure(f)
+        own = {
+            k_: v
+            for k_, v in parameter_values(f.calibration).items()
+            if any(k_.startswith(p) for p in EFFECT_FREE[name])
+        }
+        causes.append(Cause(name, f, own, _evidence(name, current, f, s_current, s_new)))
+        current, s_current = f, s_new
+        remaining.remove(name)
+
+    left = [s for s in s_current if s.p_value < STRUCTURE_P]
+    unexplained = ""
+    if left:
+        unexplained = (
+            "structure remains that no candidate explains: the residuals still depend on "
+            + ", ".join(f"{s.feature} (R^2 {s.r2:.2f})" for s in left[:3])
+        )
+    elif np.isfinite(m.sigma).any() and not _noise_consistent(current, m):
+        unexplained = (
+            f"the residual ({current.calibration.rmse_mm:.3g} mm RMS) exceeds the stated "
+            "noise without a pattern any candidate explains"
+        )
+    return Diagnosis(
+        baseline=baseline,
+        final=current,
+        causes=tuple(causes),
+        structure_before=s_base,
+        structure_after=s_current,
+        unexplained=unexplained,
+        candidates=tried,
+        time_s=time.perf_counter() - t0,
+    )
+
+
+__all__ = ["Cause", "Diagnosis", "Fit", "Structure", "diagnose", "residual_structure"]

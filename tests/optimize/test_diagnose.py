@@ -1,0 +1,106 @@
+"""Diagnosis finds the effect hidden in synthetic data, and nothing in baseline data.
+
+Each test draws its design perturbation, noise and effect strength at random at test time
+(the seed is in every failure message) inside plausible ranges, synthesises a bench data
+set with :mod:`optimize.synth`, and hands only the data and the nominal design to
+:func:`optimize.diagnose.diagnose`: no test passes by knowing what was planted except
+through the data.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from design.designfile import default_design
+from optimize.diagnose import diagnose, residual_structure
+from optimize.synth import synthesize_data
+
+DEMO = default_design()
+
+
+def draw(effects: tuple[str, ...], seed: int) -> tuple[dict[str, float], float]:
+    """A random truth: the as-built robot differs from its nominal design (stiffness,
+    magnet placement), plus each planted effect at a random plausible strength."""
+    rng = np.random.default_rng(seed)
+    truth = {
+        "bending_rigidity_scale": rng.uniform(0.7, 1.3),
+        "external_center_x": DEMO.external_magnet.center[0] + rng.uniform(-3e-3, 3e-3),
+        "external_center_y": rng.uniform(-3e-3, 3e-3),
+        "external_center_z": rng.uniform(-3e-3, 3e-3),
+    }
+    if "torsion" in effects:  # transmissions 1.5-5x stiffer than the nominal
+        truth["wire_torsion_scale"] = rng.uniform(1.5, 5.0)
+        truth["catheter_torsion_scale"] = rng.uniform(1.5, 5.0)
+    if "hysteresis" in effects:  # backlash of 2-6 deg in each transmission
+        truth["wire_friction_angle"] = np.deg2rad(rng.uniform(2.0, 6.0))
+        truth["catheter_friction_angle"] = np.deg2rad(rng.uniform(2.0, 6.0))
+    if "gravity" in effects:  # mounting pieces of 0-0.3 g at the tip
+        truth["tip_mass"] = rng.uniform(0.0, 0.3e-3)
+    noise_mm = rng.uniform(0.1, 0.4)
+    return truth, noise_mm
+
+
+def fresh_seed() -> int:
+    return int.from_bytes(os.urandom(4), "little")
+
+
+def run(effects: tuple[str, ...], seed: int, view: str = "3d"):
+    truth, noise = draw(effects, seed)
+    data = synthesize_data(
+        DEMO, effects, view=view, noise_mm=noise, seed=seed, params_override=truth
+    ).measurements
+    return diagnose(DEMO, data, seed=seed), truth, noise
+
+
+@pytest.mark.parametrize(
+    ("planted", "view"),
+    [
+        (("torsion",), "3d"),
+        (("hysteresis",), "top"),
+        (("gravity",), "3d"),
+        (("torsion", "gravity"), "3d"),
+    ],
+)
+def test_diagnosis_names_the_planted_effect_and_recovers_its_parameters(planted, view):
+    seed = fresh_seed()
+    result, truth, noise = run(planted, seed, view)
+    why = f"seed {seed}, truth {truth}, noise {noise:.2f} mm: {result.to_json()['causes']}"
+    assert {c.name for c in result.causes} == set(planted), why
+    final = result.final.calibration
+    for name in final.names:  # the effects' own parameters, within 4 reported sigma
+        if name in truth and not name.startswith(("external", "bending")):
+            err = abs(final.estimate[name] - truth[name])
+            assert err < 4 * final.standard_error[name] + 1e-9, f"{name}: {why}"
+    assert result.final.cv_rmse_mm < 0.8 * result.baseline.cv_rmse_mm, why
+    # What is left is the noise: RMS distance ~ noise sqrt(number of measured axes).
+    axes = 3 if view == "3d" else 2
+    assert result.final.calibration.rmse_mm < 1.5 * noise * np.sqrt(axes), why
+    assert all(c.evidence.startswith(c.name) for c in result.causes)
+    doc = result.to_json()
+    assert doc["gain"]["cv_rmse_ratio"] == pytest.approx(
+        result.final.cv_rmse_mm / result.baseline.cv_rmse_mm
+    )
+
+
+@pytest.mark.parametrize("case", range(3))
+def test_baseline_data_name_no_cause(case):
+    seed = fresh_seed()
+    result, truth, noise = run((), seed)
+    why = f"seed {seed}, truth {truth}, noise {noise:.2f} mm"
+    assert result.causes == (), f"{why}: {result.to_json()['causes']}"
+    assert result.to_json()["causes"] == []
+    assert result.final is result.baseline
+
+
+def test_residual_structure_finds_a_pattern_and_not_noise():
+    rng = np.random.default_rng(3)
+    angle = rng.uniform(0, 2 * np.pi, 200)
+    noise = rng.normal(0, 1.0, (200, 3))
+    pattern = noise.copy()
+    pattern[:, 0] += 2 * np.sin(angle)
+    feats = {"angle": np.column_stack([np.cos(angle), np.sin(angle)])}
+    assert residual_structure(pattern, feats)[0].p_value < 1e-10
+    assert residual_structure(noise, feats)[0].p_value > 1e-3
