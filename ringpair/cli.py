@@ -20,7 +20,7 @@ from design.atomic import write_text
 from design.designfile import DesignError, default_design, load_design, save_design
 from design.equilibrium import solve_design
 from design.magnets import cylinder_moment, ring_moment
-from design.model import EFFECTS, RingPairModel, available_effects, parse_effects
+from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, available_effects, parse_effects
 from design.params import Design
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import Workspace, sweep_workspace
@@ -60,13 +60,16 @@ def _model(effects: str) -> RingPairModel:
         raise UserError(f"--effects: {exc}") from None
 
 
-EFFECTS_OPTION = click.option(
-    "--effects",
-    default="none",
-    show_default=True,
-    help="Model effects on top of the paper's baseline: 'none', 'all' or a comma list of "
+EFFECTS_HELP = (
+    "Model effects on top of the paper's baseline: 'none', 'default' ("
+    + ",".join(sorted(DEFAULT_EFFECTS))
+    + "), 'all' or a comma list of "
     + ", ".join(EFFECTS)
-    + " (see the README for what each adds and costs).",
+    + " (see the README for what each adds and costs)."
+)
+EFFECTS_OPTION = click.option("--effects", default="none", show_default=True, help=EFFECTS_HELP)
+SIMULATION_EFFECTS_OPTION = click.option(
+    "--effects", default="default", show_default=True, help=EFFECTS_HELP
 )
 
 
@@ -150,7 +153,7 @@ def show(design: Path | None, save: Path | None) -> None:
     default=None,
     help="CSV to write. Default: outputs/<design name>/simulate.csv.",
 )
-@EFFECTS_OPTION
+@SIMULATION_EFFECTS_OPTION
 @click.option(
     "--ordered",
     is_flag=True,
@@ -239,7 +242,7 @@ def simulate(
     show_default=True,
     help="Grid spacing of theta1 and theta2 over a full turn [deg].",
 )
-@EFFECTS_OPTION
+@SIMULATION_EFFECTS_OPTION
 def workspace(design: Path | None, out: Path | None, step: float, effects: str) -> None:
     """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
 
@@ -667,6 +670,77 @@ def calibrate(
         }
         write_text(json_out, json.dumps(doc, indent=2) + "\n")
         console.print(f"wrote {json_out}")
+
+
+@cli.command()
+@click.argument("data", type=click.Path(path_type=Path))
+@click.option(
+    "--design",
+    "design_path",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Design file for a CSV DATA (default: the demonstrator); a data-set folder has its own.",
+)
+@click.option(
+    "--json",
+    "json_out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Write the diagnosis JSON (spec/formats.md) here.",
+)
+@click.option(
+    "--report",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Directory for residual plots before/after and diagnosis.html.",
+)
+@click.option("--folds", default=5, show_default=True, help="Cross-validation folds.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the fold assignment.")
+def diagnose(
+    data: Path,
+    design_path: Path | None,
+    json_out: Path | None,
+    report: Path | None,
+    folds: int,
+    seed: int,
+) -> None:
+    """What the simulation gets wrong on measured DATA, the physical cause, and the gain.
+
+    DATA is a data-set folder (design.toml + measurements.csv) or a CSV with --design.
+    Calibrates the paper's baseline, looks for structure in its residuals, adds the model
+    effects the data call for (judged by BIC and cross-validated error) and prints the
+    causes with their evidence and the fitted physical parameters.
+    """
+    from optimize.diagnose import diagnose as run_diagnosis
+
+    d, m = _measured_data(data, design_path)
+    if not 2 <= folds <= len(m):
+        raise UserError(f"--folds must be between 2 and the number of rows ({len(m)}); got {folds}")
+    with console.status("diagnosing") as status:
+        result = run_diagnosis(d, m, k=folds, seed=seed, progress=status.update)
+    doc = result.to_json()
+    table = Table(title=f"diagnosis of {m.source} ({len(m)} rows, {result.time_s:.1f} s)")
+    for col in ("model", "RMSE (mm)", "max (mm)", "cross-validated RMSE (mm)"):
+        table.add_column(col, justify="right")
+    for name, fit in (("baseline", result.baseline), (result.final.name, result.final)):
+        c = fit.calibration
+        table.add_row(name, f"{c.rmse_mm:.3f}", f"{c.max_abs_mm:.3f}", f"{fit.cv_rmse_mm:.3f}")
+    console.print(table)
+    if result.causes:
+        for cause in result.causes:
+            console.print(f"[bold]cause[/] {escape(cause.evidence)}")
+    else:
+        console.print("causes: [] (the calibrated baseline explains the data)")
+    if result.unexplained:
+        console.print(f"[yellow]not explained:[/] {escape(result.unexplained)}")
+    if json_out is not None:
+        write_text(json_out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
+        console.print(f"wrote {json_out}")
+    if report is not None:
+        from ringpair.diagnosis_report import write_report
+
+        for path in write_report(result, m, report):
+            console.print(f"wrote {path}")
 
 
 @cli.command()

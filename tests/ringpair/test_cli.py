@@ -16,6 +16,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from design.equilibrium import solve_design
+from design.model import DEFAULT_EFFECTS, RingPairModel
 from ringpair.cli import cli
 
 
@@ -34,7 +35,9 @@ def test_simulate_writes_the_paper_sweep(tmp_path, demonstrator):
     assert result.exit_code == 0, result.output
     rows = read_csv(out)
     assert [float(r["theta1_deg"]) for r in rows] == list(range(0, 181, 12))  # 16 like the paper
-    eq = solve_design(demonstrator, np.deg2rad(np.arange(0, 181, 12)), 0.0)
+    # The default model for design work (DEFAULT_EFFECTS), configuration by configuration.
+    model = RingPairModel(DEFAULT_EFFECTS)
+    eq = solve_design(demonstrator, np.deg2rad(np.arange(0, 181, 12)), 0.0, model)
     np.testing.assert_allclose([float(r["y_mm"]) for r in rows], eq.position[:, 1] * 1e3, rtol=1e-8)
     assert all(r["converged"] == "true" and r["stable"] == "true" for r in rows)
     assert "180.00" in result.output and "stable" in result.output
@@ -60,7 +63,7 @@ def test_simulate_takes_every_pair_of_two_lists(tmp_path):
 
 
 def test_workspace_writes_csv_summary_and_pictures(tmp_path):
-    result = run("workspace", "--out", str(tmp_path / "ws"), "--step", "15")
+    result = run("workspace", "--out", str(tmp_path / "ws"), "--step", "15", "--effects", "none")
     assert result.exit_code == 0, result.output
     summary = json.loads((tmp_path / "ws" / "summary.json").read_text())
     assert 15 < summary["max_deflection_mm"] < 30
@@ -171,6 +174,35 @@ def test_effects_table_compares_every_available_effect(tmp_path):
     assert float(rows["hysteresis"]["max_shift_mm"]) == 0.0  # the demonstrator has no play
     assert float(rows["gravity"]["max_shift_mm"]) > 5.0  # it droops by millimetres
     assert 0.5 < float(rows["near_field"]["max_shift_mm"]) < 5.0
+
+
+def test_diagnose_writes_the_spec_json_and_report(tmp_path):
+    data = tmp_path / "bench"
+    synth = run(
+        "synth", "--effects", "gravity", "--noise-mm", "0.2", "--seed", "4", "--out", str(data)
+    )
+    assert synth.exit_code == 0, synth.output
+    out = tmp_path / "d.json"
+    result = run("diagnose", str(data), "--json", str(out), "--report", str(tmp_path / "r"))
+    assert result.exit_code == 0, result.output
+    doc = json.loads(out.read_text())
+    assert set(doc) >= {"baseline", "causes", "final", "gain"}
+    assert [c["name"] for c in doc["causes"]] == ["gravity"]
+    for block in ("baseline", "final"):
+        assert set(doc[block]) >= {"rmse_mm", "max_abs_mm", "cv_rmse_mm", "params"}
+    assert doc["gain"]["cv_rmse_ratio"] < 0.5
+    assert "gravity" in result.output
+    page = (tmp_path / "r" / "diagnosis.html").read_text()
+    assert page.count("data:image/png;base64,") == 2 and "gravity" in page
+    img = np.asarray(Image.open(tmp_path / "r" / "residuals.png").convert("L"))
+    assert (img < 128).mean() > 0.005
+
+
+def test_diagnose_bad_folds_is_a_clear_error(tmp_path):
+    data = tmp_path / "bench"
+    assert run("synth", "--n", "20", "--out", str(data)).exit_code == 0
+    result = CliRunner().invoke(cli, ["diagnose", str(data), "--folds", "1"])
+    assert result.exit_code == 2 and "--folds" in result.output
 
 
 def test_cad_writes_checked_parts(tmp_path):
