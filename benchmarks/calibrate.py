@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-# benchmarks/optimize.py would shadow the optimize package from this folder.
+# benchmarks/design_optimization.py would shadow the optimize package from this folder.
 _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 

@@ -11,7 +11,7 @@ their file units: mm, deg, %), a candidate whose equilibria do not converge or a
 unstable scores BAD. The catheter material is an integer variable (``integrality``).
 Both optima are re-checked by the forward workspace sweep (``design.workspace``).
 
-Run: ``python benchmarks/optimize.py [--maxiter 200] [--popsize 15]``. Prints the best
+Run: ``python benchmarks/design_optimization.py [--maxiter 200] [--popsize 15]``. Prints the best
 objective of each, their wall times and the ratio. On the shared 2-core development machine
 (2026-11-22): NLP 27.022 mm (forward sweep 27.022 mm; Pebax 7233 catheter) in 4.8 s,
 9 solves, including building the NLP; differential evolution 25.355 mm (feasible) after
