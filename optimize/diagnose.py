@@ -54,6 +54,8 @@ BIC_DROP = 10.0
 strong evidence)."""
 CV_GAIN = 0.03
 """... and its cross-validated RMSE falls by more than this fraction."""
+SCREEN_EVALUATIONS = 12
+"""Model evaluations of a screening fit (a candidate's BIC before it is fitted in full)."""
 STRUCTURE_P = 1e-3
 """A residual dependence on a feature is reported as structure below this p-value."""
 NOISE_P = 1e-3
@@ -273,17 +275,29 @@ def _fit(
     k: int,
     seed: int,
     cv: bool,
-    start: CalibrationResult | None,
+    starts: Sequence[CalibrationResult | None],
     sigma: float | None,
+    max_nfev: int | None = None,
 ) -> Fit:
+    """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
+    estimates), keep the best, and cross-validate it if ``cv``."""
     free = default_free(effects)
-    options: dict[str, object] = {"ordered": "hysteresis" in effects, "sigma": sigma}
-    # From the nominal design and, if given, from the previous model's estimates (the
-    # previous model may have bent its parameters to mimic this effect): the better fit.
-    starts: list[dict[str, float] | None] = [None]
-    if start is not None:
-        starts.append({n: v for n, v in start.estimate.items() if n in free})
-    fits = [calibrate(design, m, effects, free, initial=s, **options) for s in starts]  # type: ignore[arg-type]
+    options: dict[str, object] = {
+        "ordered": "hysteresis" in effects,
+        "sigma": sigma,
+        "max_nfev": max_nfev,
+    }
+    fits = [
+        calibrate(
+            design,
+            m,
+            effects,
+            free,
+            initial=None if s is None else {n: v for n, v in s.estimate.items() if n in free},
+            **options,  # type: ignore[arg-type]
+        )
+        for s in starts
+    ]
     cal = min(fits, key=lambda c: c.chi2 if c.unconverged == 0 else math.inf)
     initial = {n: cal.estimate[n] for n in free}
     if _ordered(effects) and not options["ordered"]:
@@ -307,12 +321,6 @@ def _fit(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
         ).rmse_mm
     return Fit(effects, cal, cv_rmse, rss, n)
-
-
-def _with_cv(
-    design: Design, m: Measurements, fit: Fit, k: int, seed: int, sigma: float | None
-) -> Fit:
-    return _fit(design, m, fit.effects, k=k, seed=seed, cv=True, start=fit.calibration, sigma=sigma)
 
 
 def _noise_consistent(fit: Fit, m: Measurements) -> bool:
@@ -373,7 +381,7 @@ def diagnose(
         candidates.remove("hysteresis")  # needs the order of acquisition
     row_sigma(m, sigma)
     say("baseline")
-    current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, start=None, sigma=sigma)
+    current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, starts=[None], sigma=sigma)
     baseline = current
 
     def structure(fit: Fit) -> tuple[Structure, ...]:
@@ -392,6 +400,10 @@ def diagnose(
         fits = []
         for name in remaining:
             say(f"testing {name} on top of {current.name}")
+            # Screening: a short fit from the current estimates (and, in the first round,
+            # from the nominal design: the baseline may have bent its parameters to mimic
+            # the effect). The candidate that is taken on is refitted in full.
+            starts = [current.calibration] + ([None] if not current.effects else [])
             f = _fit(
                 design,
                 m,
@@ -399,8 +411,9 @@ def diagnose(
                 k=k,
                 seed=seed,
                 cv=False,
-                start=current.calibration,
+                starts=starts,
                 sigma=sigma,
+                max_nfev=SCREEN_EVALUATIONS,
             )
             tried[f.name] = (f.bic(), math.nan)
             fits.append((f.bic() - current.bic(), name, f))
@@ -409,7 +422,9 @@ def diagnose(
             if not drop < -BIC_DROP:
                 break
             say(f"cross-validating {f.name}")
-            f = _with_cv(design, m, f, k, seed, sigma)
+            f = _fit(
+                design, m, f.effects, k=k, seed=seed, cv=True, starts=[f.calibration], sigma=sigma
+            )
             tried[f.name] = (f.bic(), f.cv_rmse_mm)
             if f.cv_rmse_mm < (1 - CV_GAIN) * current.cv_rmse_mm:
                 accepted = (name, f)
