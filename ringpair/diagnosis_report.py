@@ -3,8 +3,8 @@
 Figures (PNG, also embedded in ``diagnosis.html``):
 - ``residuals.png``: the tip error of each row [mm] against the acquisition order, theta1
   and theta1 - theta2, for the calibrated baseline and the selected model;
-- ``positions.png``: measured tip positions and both models' predictions in the x-y and
-  x-z planes [mm].
+- ``positions.png``: measured tip positions joined to both models' predictions, seen
+  along x (the y-z plane) [mm].
 """
 
 from __future__ import annotations
@@ -58,23 +58,41 @@ def plot_residuals(d: Diagnosis, m: Measurements, path: Path) -> None:
 
 
 def plot_positions(d: Diagnosis, m: Measurements, path: Path) -> None:
-    """Measured tips and both models' tips, x-y and x-z planes [mm]."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, (i, j) in zip(axes, ((0, 1), (0, 2)), strict=True):
-        meas = m.position * 1e3
-        ax.plot(meas[:, i], meas[:, j], "k.", ms=6, label="measured")
-        for fit, colour, name in (
-            (d.baseline, "tab:red", "baseline"),
-            (d.final, "tab:blue", d.final.name),
-        ):
-            model = (m.position - fit.calibration.residuals) * 1e3
-            ax.plot(model[:, i], model[:, j], "x", ms=4, color=colour, label=name)
-        ax.set_xlabel(f"{'xyz'[i]} [mm]")
-        ax.set_ylabel(f"{'xyz'[j]} [mm]")
+    """Measured tips and both models' tips seen along x (the y-z plane, where the robot
+    steers) [mm], each measurement joined to its predictions; for top views (no z), y
+    against the acquisition order."""
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    meas = m.position * 1e3
+    has_z = np.isfinite(meas[:, 2]).mean() > 0.5
+    order = np.empty(len(m))
+    order[m.order()] = np.arange(len(m))
+    for fit, colour, name in (
+        (d.baseline, "tab:red", "baseline"),
+        (d.final, "tab:blue", d.final.name),
+    ):
+        model = (m.position - fit.calibration.residuals) * 1e3
+        if has_z:
+            a, b = model[:, 1], model[:, 2]
+            segments_x = np.vstack([meas[:, 1], a, np.full(len(m), np.nan)]).T.ravel()
+            segments_y = np.vstack([meas[:, 2], b, np.full(len(m), np.nan)]).T.ravel()
+            ax.plot(segments_x, segments_y, "-", color=colour, lw=0.8, alpha=0.6)
+        else:
+            a, b = order, model[:, 1]
+        ax.plot(a, b, "x", ms=5, color=colour, label=name)
+    if has_z:
+        ax.plot(meas[:, 1], meas[:, 2], "k.", ms=6, label="measured")
+        ax.set_xlabel("y [mm]")
+        ax.set_ylabel("z [mm]")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle("Tip positions, base frame (model shown where the coordinate was measured)")
+        title = "Tip positions seen along x (base frame), measured to model"
+    else:
+        ax.plot(order, meas[:, 1], "k.", ms=6, label="measured")
+        ax.set_xlabel("acquisition order")
+        ax.set_ylabel("y [mm]")
+        title = "Tip y (top view data), measured and model"
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
     _save(fig, path)
 
 
