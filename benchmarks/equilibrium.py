@@ -37,8 +37,14 @@ def main() -> None:
 
     solve_equilibria(model, params, theta[:10, 0], theta[:10, 1])  # compile / load once
     t0 = time.perf_counter()
+    solve_equilibria(model, params, theta[:, 0], theta[:, 1])
+    t_first = time.perf_counter() - t0
+    # The first call at a new batch size also builds CasADi maps of that size (~0.3 s
+    # each, once per process); the throughput is that of the calls after it.
+    t0 = time.perf_counter()
     eq = solve_equilibria(model, params, theta[:, 0], theta[:, 1])
     t_batch = time.perf_counter() - t0
+    print(f"first call at this batch size (builds the maps): {t_first:.3f} s")
 
     residual = compile_function(model.residual)
     sub = theta[: args.loop]

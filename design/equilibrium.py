@@ -31,6 +31,7 @@ NEWTON_STEPS = 6
 TOLERANCE = 1e-10
 """Convergence: infinity norm of the scaled residual below this. [m or rad]"""
 CHUNK = 65536
+GRAIN = 1024
 THREADS = 2
 CONTINUATION_STEPS = (4, 16, 64)
 SUBSTEP = np.deg2rad(1.0)
@@ -121,34 +122,53 @@ def _evaluate(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]
     return [o.reshape(function.size2_out(i), function.size1_out(i)).T for i, o in enumerate(outs)]
 
 
+def _chunked(function: Any, args: list[np.ndarray], n: int) -> list[np.ndarray]:
+    """Evaluate ``function(size)`` (a mapped CasADi function of ``size`` columns) on the
+    columns of ``args`` in chunks of CHUNK; the last chunk is padded to a multiple of GRAIN
+    columns (few distinct map sizes, little wasted work). Returns (rows, n) outputs."""
+    outs: list[list[np.ndarray]] = []
+    for start in range(0, n, CHUNK):
+        stop = min(start + CHUNK, n)
+        size = min(CHUNK, -(-(stop - start) // GRAIN) * GRAIN)
+        pad = size - (stop - start)
+        chunk = [a[:, start:stop] for a in args]
+        if pad:
+            chunk = [np.pad(a, ((0, 0), (0, pad)), mode="edge") for a in chunk]
+        results = _evaluate(function(size), chunk)
+        outs = outs or [[] for _ in results]
+        for acc, out in zip(outs, results, strict=True):
+            acc.append(out[:, : stop - start])
+    return [np.concatenate(acc, axis=1) for acc in outs]
+
+
+def _columns(params: np.ndarray, n: int) -> np.ndarray:
+    """params (k,) shared by all columns, or (k, n) one per column -> (k, n)."""
+    return np.broadcast_to(params[:, None], (params.size, n)) if params.ndim == 1 else params
+
+
 def _run(
     model: RingPairModel, x0: np.ndarray, command: np.ndarray, params: np.ndarray
 ) -> tuple[np.ndarray, ...]:
-    """Run the compiled solver on columns (x0, command, params), in fixed-size chunks.
+    """Run the compiled solver on columns (x0, command, params).
 
     params : shape (n,) shared by all columns, or (n, N) one per column.
     """
     n = command.shape[1]
-    size = min(CHUNK, n)
-    if params.ndim == 1:
-        params = np.broadcast_to(params[:, None], (params.size, n))
-    outs: list[list[np.ndarray]] = [[] for _ in range(6)]
-    for start in range(0, n, size):
-        stop = min(start + size, n)
-        pad = size - (stop - start)
-        args = [a[:, start:stop] for a in (x0, command, params)]
-        if pad:
-            args = [np.pad(a, ((0, 0), (0, pad)), mode="edge") for a in args]
-        for acc, out in zip(outs, _evaluate(_mapped(model, size), args), strict=True):
-            acc.append(out[:, : stop - start])
-    return tuple(np.concatenate(acc, axis=1) for acc in outs)
+    args = [x0, command, _columns(params, n)]
+    return tuple(_chunked(lambda size: _mapped(model, size), args, n))
+
+
+@lru_cache(maxsize=16)
+def _mapped_initial(model: RingPairModel, size: int) -> ca.Function:
+    return model.initial.map(size)
 
 
 def _initial(model: RingPairModel, command: np.ndarray, params: np.ndarray) -> np.ndarray:
     """Newton's start: the straight robot; for the large-deflection rod the prediction from
     the linear model's equilibrium, and NaN where that did not converge (so that the
     column goes to load continuation rather than start from a coiled rod)."""
-    x0 = np.asarray(model.initial.map(command.shape[1])(command, params))
+    n = command.shape[1]
+    x0 = _chunked(lambda size: _mapped_initial(model, size), [command, _columns(params, n)], n)[0]
     if model.predictor is None:
         return x0
     x_lin, res = _solve_columns(model.linear(), params, command)[:2]
