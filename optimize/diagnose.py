@@ -34,6 +34,7 @@ import numpy as np
 from scipy import stats
 
 from design.model import EFFECTS
+from design.sections import tube_torsional_rigidity
 from design.params import Design
 from optimize.calibrate import (
     EFFECT_FREE,
@@ -438,6 +439,10 @@ def diagnose(
             for k_, v in parameter_values(f.calibration).items()
             if any(k_.startswith(p) for p in EFFECT_FREE[name])
         }
+        for tube in ("wire", "catheter"):  # the physical quantity behind each factor
+            if f"{tube}_torsion_scale" in own:
+                gj = tube_torsional_rigidity(getattr(design.robot, tube))
+                own[f"{tube}_torsional_rigidity_n_m2"] = own[f"{tube}_torsion_scale"] * gj
         causes.append(Cause(name, f, own, _evidence(name, current, f, s_current, s_new)))
         current, s_current = f, s_new
         remaining.remove(name)
