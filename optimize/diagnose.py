@@ -34,8 +34,8 @@ import numpy as np
 from scipy import stats
 
 from design.model import EFFECTS
-from design.sections import tube_torsional_rigidity
 from design.params import Design
+from design.sections import tube_torsional_rigidity
 from optimize.calibrate import (
     EFFECT_FREE,
     FREE_PARAMETERS,
