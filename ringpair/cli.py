@@ -783,6 +783,11 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
         sys.exit(3)
 
 
+from ringpair.optimize_cli import optimize as _optimize  # noqa: E402
+
+cli.add_command(_optimize)
+
+
 def main() -> None:
     """Console-script entry point."""
     try:

@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import tomli_w
+from studies import SMALL
 
 from design.constants import MU0
 from design.designfile import default_design, design_to_dict, load_design, save_design
@@ -159,28 +160,6 @@ def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
     assert result.starts[0].status == "error: RuntimeError"
     assert result.starts[0].message == "IPOPT crashed"
     assert result.feasible and result.starts[1].accepted
-
-
-SMALL = """
-name = "small"
-objective = "disc_radius"
-[free]
-ring_length_mm = [0.3, 1.5]
-ring_gap_mm = [0.0, 1.0]
-wire_outer_diameter_mm = [0.3, 0.6]
-external_distance_mm = [70.0, 200.0]
-[materials]
-catheter = ["ptfe"]
-wire = ["niti"]
-[constraints]
-twist_limit_deg = 20.0
-neutral_tolerance_mm = 0.8
-magnet_clearance_mm = 5.0
-[solver]
-starts = 2
-configurations = 24
-neutral_configurations = 8
-"""
 
 
 def _dipole_field(offset, moment):

@@ -1,0 +1,180 @@
+"""Pareto studies: epsilon-constraint sweeps, one design NLP per point, on Dask.
+
+Each point of a sweep bounds one quantity (catheter outer diameter and magnet volume from
+above, external-magnet distance from below, :data:`optimize.study.PARETO_QUANTITIES`) and
+maximises the study's objective with :func:`optimize.nlp.solve_study`. Points are
+independent, so they run as Dask tasks: on a local cluster (processes, one thread each)
+by default, or on an existing cluster given its scheduler address. Each finished point
+is stored under ``out_dir/points/`` keyed by a hash of the study and the point, so a rerun
+of the same inputs skips what is already solved; a point whose solve raises is stored as
+a failure with its message and does not stop the sweep.
+
+SI units are used for all inputs and outputs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import pickle
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from optimize.nlp import StudyResult, pareto_values, solve_study
+from optimize.study import Study
+
+Progress = Callable[[int, int], None]
+"""progress(done, total), called as points finish (resumed ones count at once)."""
+POINTS = "points"
+
+
+@dataclass(frozen=True)
+class ParetoPoint:
+    """One point of a sweep: the bound imposed and the NLP's answer.
+
+    against : the bounded quantity. epsilon : its bound. [m or m^3]
+    result : the study result, or None if the solve raised (``error`` says why).
+    resumed : read back from an earlier run instead of solved now.
+    """
+
+    against: str
+    epsilon: float
+    result: StudyResult | None
+    error: str = ""
+    resumed: bool = False
+
+    @property
+    def feasible(self) -> bool:
+        return self.result is not None and self.result.feasible
+
+    @property
+    def objective(self) -> float:
+        """The study's objective, NaN where infeasible or failed. [SI]"""
+        return self.result.objective if self.feasible else float("nan")  # type: ignore[union-attr]
+
+
+@dataclass(frozen=True)
+class ParetoResult:
+    """Every sweep of a study, points in increasing epsilon. seconds : wall time. [s]"""
+
+    sweeps: dict[str, tuple[ParetoPoint, ...]]
+    solved: int
+    resumed: int
+    seconds: float
+    workers: int
+
+
+def point_key(study: Study, against: str, epsilon: float) -> str:
+    """Identity of one point's inputs: the study (every field) and the bound. [-]"""
+    blob = pickle.dumps((study, against, round(float(epsilon), 15)), protocol=4)
+    return hashlib.sha256(blob).hexdigest()[:24]
+
+
+def _solve_point(study: Study, against: str, epsilon: float) -> tuple[StudyResult | None, str]:
+    try:
+        return solve_study(study, epsilon={against: epsilon}), ""
+    except Exception as exc:  # a failed point is an answer, not the end of the sweep
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def _store(path: Path, point: ParetoPoint) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "wb") as f:
+        pickle.dump(point, f, protocol=4)
+    os.replace(tmp, path)
+
+
+def _load(path: Path) -> ParetoPoint | None:
+    try:
+        with path.open("rb") as f:
+            point = pickle.load(f)
+    except (OSError, pickle.UnpicklingError, EOFError, AttributeError):
+        return None
+    return point if isinstance(point, ParetoPoint) else None
+
+
+def run_sweeps(
+    study: Study,
+    out_dir: Path,
+    *,
+    scheduler: str | None = None,
+    workers: int = 2,
+    progress: Progress | None = None,
+) -> ParetoResult:
+    """Solve every Pareto sweep of ``study`` (``study.pareto``), resuming from ``out_dir``.
+
+    scheduler : address of a running Dask scheduler (e.g. ``tcp://host:8786``); None starts
+        a local cluster of ``workers`` processes for the duration of the call.
+    progress : called with (points done, points in all).
+    """
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    t0 = time.perf_counter()
+    store = Path(out_dir) / POINTS
+    plan = [
+        (s.against, float(e), store / f"{point_key(study, s.against, e)}.pkl")
+        for s in study.pareto
+        for e in pareto_values(study, s)
+    ]
+    done: dict[Path, ParetoPoint] = {}
+    for _, _, path in plan:
+        old = _load(path) if path.exists() else None
+        if old is not None:
+            done[path] = ParetoPoint(old.against, old.epsilon, old.result, old.error, True)
+    total, resumed = len(plan), len(done)
+    if progress:
+        progress(resumed, total)
+    todo = [(a, e, p) for a, e, p in plan if p not in done]
+    used = 0
+    if todo:
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+        cluster = None
+        if scheduler is None:
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+        try:
+            with Client(cluster if cluster is not None else scheduler) as client:
+                used = len(client.scheduler_info()["workers"])
+                futures = {
+                    client.submit(_solve_point, study, a, e, pure=False): (a, e, p)
+                    for a, e, p in todo
+                }
+                for future in as_completed(futures):
+                    a, e, path = futures[future]
+                    result, error = future.result()
+                    point = ParetoPoint(a, e, result, error)
+                    _store(path, point)
+                    done[path] = point
+                    if progress:
+                        progress(len(done), total)
+        finally:
+            if cluster is not None:
+                cluster.close()
+    sweeps = {s.against: tuple(done[p] for a, _, p in plan if a == s.against) for s in study.pareto}
+    return ParetoResult(sweeps, len(todo), resumed, time.perf_counter() - t0, used)
+
+
+def is_monotone(points: tuple[ParetoPoint, ...], tolerance: float = 1e-6) -> bool:
+    """The front never improves as the bound tightens: objective non-decreasing in epsilon
+    for upper bounds (diameter, volume), non-increasing for the distance's lower bound,
+    over the feasible points, within ``tolerance`` relative."""
+    feasible = [p for p in points if p.feasible]
+    if len(feasible) < 2:
+        return True
+    values = np.array([p.objective for p in feasible])
+    if feasible[0].against == "external_distance":
+        values = values[::-1]
+    scale = np.abs(values).max()
+    return bool(np.all(np.diff(values) >= -tolerance * scale))
