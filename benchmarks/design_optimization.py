@@ -50,6 +50,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--maxiter", type=int, default=200, help="DE generations at most")
     parser.add_argument("--popsize", type=int, default=15, help="DE population multiplier")
+    parser.add_argument(
+        "--no-pareto", dest="pareto", action="store_false", help="skip the Dask worker timing"
+    )
     args = parser.parse_args()
     study = default_study()
     combos = material_combinations(study)
@@ -114,6 +117,32 @@ def main() -> None:
     )
     print(f"  objective ratio NLP / DE: {result.objective / de_eval.objective:.4f}")
     print(f"  wall-time ratio DE / NLP: {t_de / t_nlp:.1f}x")
+    if args.pareto:
+        pareto_workers(study)
+
+
+def pareto_workers(study) -> None:
+    """Wall time of one Pareto sweep (the external-magnet distance, the default study's
+    points) on a local Dask cluster of 1 and of 2 workers, from scratch each time."""
+    import dataclasses
+    import tempfile
+    from pathlib import Path
+
+    from optimize.sweeps import run_sweeps
+
+    sweep = next(s for s in study.pareto if s.against == "external_distance")
+    one = dataclasses.replace(study, pareto=(sweep,))
+    times = {}
+    for workers in (1, 2):
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            result = run_sweeps(one, Path(tmp), workers=workers)
+            times[workers] = time.perf_counter() - t0
+        print(
+            f"  Pareto sweep, {result.solved} points, {workers} Dask worker(s): "
+            f"{times[workers]:6.1f} s (cluster start-up included)"
+        )
+    print(f"  speed-up 2 vs 1 workers: {times[1] / times[2]:.2f}x")
 
 
 if __name__ == "__main__":

@@ -99,6 +99,8 @@ def plot_fronts(pareto: ParetoResult, best: StudyResult, study: Study, path: Pat
             )
         ax.set_xlabel(label)
         ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.set_ylim(bottom=0, top=1.1 * np.nanmax(np.r_[obj, _objective_mm(study, best.objective)]))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(f"Pareto fronts of '{study.name}'")
