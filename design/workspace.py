@@ -103,6 +103,14 @@ def _loop_radius(loop: np.ndarray, angles: np.ndarray) -> np.ndarray:
     return np.interp(angles, phi, r, period=2 * np.pi)
 
 
+def disc_radius(loop: np.ndarray) -> float:
+    """Radius of the largest disc around the origin inside the closed loop (S, 2) [m]: the
+    distance to its nearest segment, 0 if the loop does not wind around the origin."""
+    if loop.shape[0] < 3 or _winding_number(loop, np.zeros(2)) == 0:
+        return 0.0
+    return float(_segment_distance(np.zeros((1, 2)), loop, np.roll(loop, -1, axis=0)).min())
+
+
 def workspace_metrics(
     grid: Equilibria, parallel: Equilibria, antiparallel: Equilibria, rest_position: np.ndarray
 ) -> Workspace:
@@ -119,8 +127,7 @@ def workspace_metrics(
     disc = 0.0
     excess = float("nan")
     if outer.shape[0] >= 3 and _winding_number(outer, np.zeros(2)) != 0:
-        seg_a, seg_b = outer, np.roll(outer, -1, axis=0)
-        disc = float(_segment_distance(np.zeros((1, 2)), seg_a, seg_b).min())
+        disc = disc_radius(outer)
         polar = np.arctan2(reach[:, 2], reach[:, 1])
         radial = np.linalg.norm(reach[:, 1:], axis=1)
         excess = float(max(0.0, np.max(radial - _loop_radius(outer, polar))))

@@ -787,6 +787,10 @@ from ringpair.optimize_cli import optimize as _optimize  # noqa: E402
 
 cli.add_command(_optimize)
 
+from ringpair.study_cli import study as _study  # noqa: E402
+
+cli.add_command(_study)
+
 
 def main() -> None:
     """Console-script entry point."""

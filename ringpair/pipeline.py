@@ -1,0 +1,325 @@
+"""The main job: a study file through every stage to a report, with a manifest.
+
+Stages (each a function of the study and earlier stages' results, timed, cached under
+``OUT/.stages/<stage>-<hash>.pkl`` so a rerun with the same inputs reuses it):
+
+1. ``baseline``: workspace of the starting design (the study's model);
+2. ``optimise``: the study's NLP (:func:`optimize.nlp.solve_study`);
+3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sweeps.run_sweeps`);
+4. ``forward``: the starting and the chosen design re-simulated with the model for design
+   work (:data:`design.model.DEFAULT_EFFECTS`);
+5. ``tolerance``: Monte Carlo over manufacturing tolerances (:data:`TOLERANCES`), the
+   spread of the chosen design's disc radius (one batch solve of every sample's
+   parallel-ring loop);
+6. ``effects``: how far each model effect moves the chosen design's tip;
+7. ``cad``: parts, checks and renders of the chosen design (:func:`cad.build_parts`);
+8. ``diagnosis``: of measured data, when given.
+
+SI units inside; the report and the manifest say their units.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+import platform
+import subprocess
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from design.equilibrium import solve_design, solve_equilibria
+from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel
+from design.parameters import index
+from design.params import Design
+from design.workspace import LOOP_SAMPLES, Workspace, angle_grid, disc_radius, sweep_workspace
+from optimize.study import Study
+
+TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
+    "ring_remanence": ("rel", 0.02),
+    "ring_outer_diameter": ("abs", 0.02e-3),
+    "ring_inner_diameter": ("abs", 0.02e-3),
+    "ring_length": ("abs", 0.02e-3),
+    "catheter_youngs_modulus": ("rel", 0.10),
+    "wire_youngs_modulus": ("rel", 0.05),
+    "external_remanence": ("rel", 0.02),
+    "external_center_x": ("abs", 1e-3),
+    "external_center_y": ("abs", 1e-3),
+    "external_center_z": ("abs", 1e-3),
+}
+"""Manufacturing and placement tolerances of the Monte Carlo (one sigma): grade spread of
+NdFeB remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %),
+NiTi wire (5 %), and +-1 mm placement of the external magnet."""
+
+Say = Callable[[str], None]
+
+
+class StageError(RuntimeError):
+    """A stage failed; ``stage`` names it."""
+
+    def __init__(self, stage: str, message: str) -> None:
+        super().__init__(f"stage '{stage}' failed: {message}")
+        self.stage = stage
+
+
+@dataclass
+class Run:
+    """Results of the stages so far, their timings [s] and whether each was reused."""
+
+    out: Path
+    study: Study
+    results: dict[str, Any] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+    reused: dict[str, bool] = field(default_factory=dict)
+
+
+def _key(*parts: object) -> str:
+    return hashlib.sha256(pickle.dumps(parts, protocol=4)).hexdigest()[:20]
+
+
+def _stage(run: Run, name: str, inputs: tuple, work: Callable[[], Any]) -> Any:
+    """Run one stage, or reuse its stored result for the same inputs."""
+    store = run.out / ".stages" / f"{name}-{_key(name, *inputs)}.pkl"
+    t0 = time.perf_counter()
+    if store.exists():
+        with store.open("rb") as f:
+            result = pickle.load(f)
+        run.reused[name] = True
+    else:
+        try:
+            result = work()
+        except Exception as exc:
+            raise StageError(name, f"{type(exc).__name__}: {exc}") from exc
+        store.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=store.parent, suffix=".tmp")
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump(result, f, protocol=4)
+        os.replace(tmp, store)
+        run.reused[name] = False
+    run.results[name] = result
+    run.seconds[name] = time.perf_counter() - t0
+    return result
+
+
+def tolerance_spread(
+    design: Design, samples: int, seed: int, model: RingPairModel
+) -> dict[str, Any]:
+    """Disc radius of ``samples`` perturbed copies of ``design`` [m] (TOLERANCES, seeded)."""
+    rng = np.random.default_rng(seed)
+    base = model.parameters(design)
+    params = np.repeat(base[:, None], samples, axis=1)
+    for name, (kind, sigma) in TOLERANCES.items():
+        noise = rng.normal(0.0, sigma, samples)
+        i = index(name)
+        params[i] = params[i] * (1 + noise) if kind == "rel" else params[i] + noise
+    loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
+    theta = np.tile(loop, samples)
+    eq = solve_equilibria(model, np.repeat(params, len(loop), axis=1), theta, theta)
+    rest = np.array([design.robot.free_length, 0.0, 0.0])
+    radii = []
+    for k in range(samples):
+        rows = slice(k * len(loop), (k + 1) * len(loop))
+        ok = eq.stable[rows]
+        radii.append(disc_radius((eq.position[rows][ok] - rest)[:, 1:]))
+    return {"disc_radius": np.array(radii), "samples": samples, "seed": seed}
+
+
+def effect_shifts(design: Design) -> list[dict[str, float | str]]:
+    """Tip shift [mm] of each effect against the baseline, theta1 = 0..180 deg in order,
+    theta2 = 0 (as ``ringpair effects``)."""
+    theta = np.deg2rad(np.arange(0.0, 181.0, 12.0))
+    base = solve_design(design, theta, 0.0, RingPairModel(), ordered=True)
+    rows: list[dict[str, float | str]] = []
+    for name in (*EFFECTS, "all"):
+        chosen = frozenset(EFFECTS) if name == "all" else frozenset({name})
+        eq = solve_design(design, theta, 0.0, RingPairModel(chosen), ordered=True)
+        shift = np.linalg.norm(eq.position - base.position, axis=1) * 1e3
+        rows.append(
+            {
+                "effect": name,
+                "max_shift_mm": float(np.nanmax(shift)),
+                "rms_shift_mm": float(np.sqrt(np.nanmean(shift**2))),
+            }
+        )
+    return rows
+
+
+def sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def versions() -> dict[str, str]:
+    """Python, key packages and the project's git commit (if known)."""
+    import casadi
+    import scipy
+
+    out = {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "casadi": str(getattr(casadi, "__version__", "unknown")),
+    }
+    try:
+        import cadquery
+
+        out["cadquery"] = str(getattr(cadquery, "__version__", "unknown"))
+    except ImportError:  # pragma: no cover - CAD is a dependency
+        pass
+    try:
+        here = Path(__file__).resolve().parent
+        commit = subprocess.run(
+            ["git", "-C", str(here), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        out["ringpair_commit"] = commit
+    except (OSError, subprocess.CalledProcessError):
+        out["ringpair_commit"] = "unknown"
+    return out
+
+
+def run_study(
+    study: Study,
+    out: Path,
+    *,
+    study_text: str,
+    data: Path | None = None,
+    workers: int = 2,
+    scheduler: str | None = None,
+    samples: int = 200,
+    seed: int = 0,
+    cad_process: str = "fdm",
+    render: bool = True,
+    say: Say | None = None,
+) -> Run:
+    """Every stage of the main job; StageError names a failing stage (earlier stages'
+    outputs stay valid on disk)."""
+    from cad import build_parts
+    from optimize.nlp import solve_study
+    from optimize.sweeps import run_sweeps
+
+    tell = say or (lambda _: None)
+    run = Run(out, study)
+    model = RingPairModel(study.effects)
+    key = (study_text,)
+    tell("baseline workspace of the starting design")
+    _stage(run, "baseline", key, lambda: sweep_workspace(study.base, model=model))
+    tell("optimisation (IPOPT, multi-start)")
+    best = _stage(run, "optimise", key, lambda: solve_study(study))
+    if not best.feasible or best.design is None:
+        raise StageError("optimise", "the study is infeasible: " + best.report())
+    chosen: Design = best.design
+    if study.pareto:
+        tell("Pareto sweeps on Dask")
+        _stage(
+            run,
+            "pareto",
+            key,
+            lambda: run_sweeps(study, out / "pareto", scheduler=scheduler, workers=workers),
+        )
+    faithful = RingPairModel(DEFAULT_EFFECTS)
+    tell("forward re-simulation with the model for design work")
+    _stage(
+        run,
+        "forward",
+        key,
+        lambda: {
+            "start": sweep_workspace(study.base, model=faithful),
+            "best": sweep_workspace(chosen, model=faithful),
+        },
+    )
+    tell(f"tolerance Monte Carlo ({samples} samples)")
+    _stage(
+        run,
+        "tolerance",
+        (*key, samples, seed),
+        lambda: tolerance_spread(chosen, samples, seed, faithful),
+    )
+    tell("how much each model effect matters")
+    _stage(run, "effects", key, lambda: effect_shifts(chosen))
+    tell("CAD: parts, checks, renders")
+    _stage(
+        run,
+        "cad",
+        (*key, cad_process, render),
+        lambda: _cad_summary(build_parts(chosen, out / "cad", cad_process, render=render)),
+    )
+    if data is not None:
+        tell("diagnosis of the measured data")
+        _stage(run, "diagnosis", (*key, _tree_hash(data)), lambda: _diagnose(data))
+    return run
+
+
+def _cad_summary(report: Any) -> dict[str, Any]:
+    """The picklable part of a CAD report (files relative to its folder)."""
+    return {
+        "out_dir": str(report.out_dir),
+        "files": [str(p) for p in report.files],
+        "checks": report.checks,
+        "parts": report.parts,
+        "passed": report.passed,
+        "timings_s": report.timings_s,
+    }
+
+
+def _tree_hash(path: Path) -> str:
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    return _key(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
+
+
+def _diagnose(data: Path) -> dict[str, Any]:
+    from optimize.diagnose import diagnose
+    from optimize.measurements import load_dataset
+
+    design, m = load_dataset(data)
+    return diagnose(design, m).to_json()
+
+
+def write_manifest(run: Run, study_path: Path | None, data: Path | None, seed: int) -> Path:
+    """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file."""
+    inputs: dict[str, Any] = {
+        "study": {
+            "path": str(study_path) if study_path else "embedded default study",
+            "sha256": sha256(study_path) if study_path else None,
+        }
+    }
+    if data is not None:
+        inputs["data"] = {"path": str(data), "sha256": _tree_hash(data)}
+    files = sorted(
+        p
+        for p in run.out.rglob("*")
+        if p.is_file() and ".stages" not in p.parts and p.name != "manifest.json"
+    )
+    doc = {
+        "study": run.study.name,
+        "inputs": inputs,
+        "versions": versions(),
+        "seeds": {"tolerance": seed, "study": run.study.seed},
+        "stages": {
+            name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
+        },
+        "files": [
+            {"path": str(p.relative_to(run.out)), "bytes": p.stat().st_size, "sha256": sha256(p)}
+            for p in files
+        ],
+    }
+    from design.atomic import write_text
+
+    path = run.out / "manifest.json"
+    write_text(path, json.dumps(doc, indent=2) + "\n")
+    return path
+
+
+__all__ = ["TOLERANCES", "Run", "StageError", "Workspace", "run_study", "write_manifest"]

@@ -1,0 +1,99 @@
+"""``ringpair study``: the main job, from a study file to the report (see
+:mod:`ringpair.pipeline`)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+
+from optimize.study import StudyError, default_study, load_study
+from ringpair.pipeline import StageError, run_study, write_manifest
+
+
+@click.command()
+@click.argument("study_path", metavar="[STUDY]", required=False, type=click.Path(path_type=Path))
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Output directory. Default: outputs/<study name>.",
+)
+@click.option(
+    "--data",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Measured data set (folder with design.toml and measurements.csv) to diagnose.",
+)
+@click.option("--samples", default=200, show_default=True, help="Tolerance Monte Carlo samples.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the Monte Carlo.")
+@click.option("--workers", default=2, show_default=True, help="Local Dask workers.")
+@click.option("--scheduler", default=None, help="Address of a running Dask scheduler.")
+@click.option("--no-render", is_flag=True, help="Skip the part renders (faster).")
+def study(
+    study_path: Path | None,
+    out: Path | None,
+    data: Path | None,
+    samples: int,
+    seed: int,
+    workers: int,
+    scheduler: str | None,
+    no_render: bool,
+) -> None:
+    """Run STUDY (default: the embedded demonstrator study) through every stage: starting
+    workspace, optimisation, Pareto sweeps (Dask), forward re-simulation with the model for
+    design work, tolerance Monte Carlo, model effects, CAD and (with --data) diagnosis.
+    Writes report.html (self-contained), results.json, manifest.json and each stage's
+    files. Finished stages are reused when rerun with the same inputs.
+
+    Exit codes: 0 done; 2 bad input; 3 a stage failed (named, with what was written).
+    """
+    import sys
+
+    from ringpair.cli import UserError, console, err_console
+    from ringpair.report_html import write_report
+
+    try:
+        text = study_path.read_text() if study_path else ""
+        s = default_study() if study_path is None else load_study(study_path)
+    except (StudyError, OSError, UnicodeDecodeError) as exc:
+        raise UserError(str(exc)) from None
+    if data is not None and not (data / "measurements.csv").is_file():
+        raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
+    if samples < 2:
+        raise UserError(f"--samples must be at least 2; got {samples}")
+    out = out or Path("outputs") / s.name
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    try:
+        with console.status("starting") as status:
+
+            def say(stage: str) -> None:
+                status.update(f"{stage} ({time.perf_counter() - t0:.0f} s)")
+                console.print(f"[dim]{time.perf_counter() - t0:6.1f} s[/] {stage}")
+
+            run = run_study(
+                s,
+                out,
+                study_text=text or repr(s),
+                data=data,
+                workers=workers,
+                scheduler=scheduler,
+                samples=samples,
+                seed=seed,
+                render=not no_render,
+                say=say,
+            )
+            say("report")
+            written = write_report(run)
+    except StageError as exc:
+        err_console.print(f"[bold red]error:[/] {exc}")
+        done = sorted(p for p in out.rglob("*") if p.is_file() and ".stages" not in p.parts)
+        err_console.print(f"files already written and valid: {len(done)} under {out}")
+        sys.exit(3)
+    manifest = write_manifest(run, study_path, data, seed)
+    for name, sec in run.seconds.items():
+        console.print(f"  {name:10s} {sec:7.1f} s" + ("  (reused)" if run.reused[name] else ""))
+    console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}")
+    console.print(f"done in {time.perf_counter() - t0:.1f} s")
