@@ -168,7 +168,10 @@ def write_report(run: Run) -> list[Path]:
         ]
         for c in cad["checks"]
     ]
-    renders = [Path(f) for f in cad["files"] if f.endswith(".png") and Path(f).exists()]
+    pngs = {Path(f).name: Path(f) for f in cad["files"] if f.endswith(".png") and Path(f).exists()}
+    renders = [pngs[n] for n in ("assembly.png", "tip_section.png") if n in pngs] or list(
+        pngs.values()
+    )
     if "diagnosis" in run.results:
         dg = run.results["diagnosis"]
         causes = "".join(f"<li>{html.escape(c['evidence'])}</li>" for c in dg["causes"]) or (
@@ -187,7 +190,7 @@ def write_report(run: Run) -> list[Path]:
 <style>body{{font-family:sans-serif;max-width:1150px;margin:2em auto;color:#222}}
 table{{border-collapse:collapse;margin:0.5em 0}}td,th{{border:1px solid #bbb;padding:3px 8px}}
 th{{background:#eee}}img{{max-width:100%;margin:4px 0}}.row{{display:flex;gap:8px}}
-.row img{{max-width:49%}}</style></head><body>
+.row img{{max-width:49%;height:auto}}.row{{align-items:flex-start}}</style></head><body>
 <h1>Design study: {html.escape(run.study.name)}</h1>
 <h2 id="setup">Set-up</h2>
 <p>{html.escape(run.study.description)} Study model: {", ".join(doc["model"])}; materials of

@@ -96,3 +96,34 @@ def test_bad_study_is_exit_2_and_writes_nothing(tmp_path):
     result = CliRunner().invoke(cli, ["study", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "freee" in result.output
     assert not (tmp_path / "o").exists()
+
+
+def test_report_renders_in_headless_chromium(study_run, tmp_path):
+    import shutil
+    import subprocess
+
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("Chromium is not installed (Debian package 'chromium'; .ci/run installs it)")
+    _, out, _, _ = study_run
+    shot = tmp_path / "report.png"
+    subprocess.run(
+        [
+            browser,
+            "--headless",
+            "--disable-gpu",
+            "--no-sandbox",
+            "--hide-scrollbars",
+            f"--screenshot={shot}",
+            "--window-size=1200,2600",
+            (out / "report.html").resolve().as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    img = np.asarray(Image.open(shot).convert("RGB")).astype(float)
+    assert img.shape[:2] == (2600, 1200)
+    # Text and embedded figures drew: dark pixels and coloured (plot) pixels both present.
+    assert (img.mean(axis=2) < 100).mean() > 0.002
+    assert (np.ptp(img, axis=2) > 60).mean() > 0.002
