@@ -142,6 +142,9 @@ def run_sweeps(
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=None,
+                # the scheduler's HTTP server (metrics) starts even without a dashboard;
+                # a free port, not 8787, so a second cluster on the machine does not warn
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 silence_logs=logging.ERROR,
             )
         try:
