@@ -191,3 +191,15 @@ def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design) 
     for theta1 in (-8.0, 188.0):
         parts = placed(theta1)
         assert _overlap(parts["proximal"], parts["distal"]) > 0.05, theta1
+
+
+@pytest.mark.parametrize("ring_od_mm", [2.889909170850447, 3.1, 4.0])
+def test_dimensions_derived_from_the_magnet_hold_at_the_limit(demonstrator: Design, ring_od_mm):
+    # The piece's outer diameter is derived from the magnet seat, so the seat sits exactly
+    # at its limit; rounding must not reject it (the default study's optimum, 2.8899 mm
+    # rings, was rejected by 1 ulp).
+    from cad.mounting import mounting_dims
+
+    tip = replace(demonstrator.tip, magnet_outer_diameter=ring_od_mm * 1e-3)
+    dims = mounting_dims(replace(demonstrator, tip=tip), FDM, MountingSpec())
+    assert isinstance(dims, MountingDims)
