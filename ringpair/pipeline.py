@@ -30,6 +30,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +40,7 @@ from design.equilibrium import solve_design, solve_equilibria
 from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel
 from design.parameters import index
 from design.params import Design
-from design.workspace import LOOP_SAMPLES, Workspace, angle_grid, disc_radius, sweep_workspace
+from design.workspace import Workspace, angle_grid, disc_radius, sweep_workspace
 from optimize.study import Study
 
 TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
@@ -58,15 +59,20 @@ TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [
 NdFeB remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %),
 NiTi wire (5 %), and +-1 mm placement of the external magnet."""
 
+TOLERANCE_LOOP = 120
+"""Parallel-ring loop samples per Monte Carlo sample: the polygon's inscribed disc is then
+within r (1 - cos(pi / 120)) ~ 0.01 mm of the loop's for a 27 mm disc."""
+
 Say = Callable[[str], None]
 
 
 class StageError(RuntimeError):
-    """A stage failed; ``stage`` names it."""
+    """A stage failed; ``stage`` names it, ``run`` holds the stages finished before it."""
 
-    def __init__(self, stage: str, message: str) -> None:
+    def __init__(self, stage: str, message: str, run: Run | None = None) -> None:
         super().__init__(f"stage '{stage}' failed: {message}")
         self.stage = stage
+        self.run = run
 
 
 @dataclass
@@ -85,26 +91,29 @@ def _key(*parts: object) -> str:
 
 
 def _stage(run: Run, name: str, inputs: tuple, work: Callable[[], Any]) -> Any:
-    """Run one stage, or reuse its stored result for the same inputs."""
-    store = run.out / ".stages" / f"{name}-{_key(name, *inputs)}.pkl"
-    t0 = time.perf_counter()
+    """Run one stage, or reuse its stored result for the same inputs and the same code
+    (the key includes the git commit); a reused stage reports the seconds it took."""
+    code = versions().get("ringpair_commit", "unknown")
+    store = run.out / ".stages" / f"{name}-{_key(name, code, *inputs)}.pkl"
     if store.exists():
         with store.open("rb") as f:
-            result = pickle.load(f)
+            result, seconds = pickle.load(f)
         run.reused[name] = True
     else:
+        t0 = time.perf_counter()
         try:
             result = work()
         except Exception as exc:
-            raise StageError(name, f"{type(exc).__name__}: {exc}") from exc
+            raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
+        seconds = time.perf_counter() - t0
         store.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=store.parent, suffix=".tmp")
         with os.fdopen(fd, "wb") as f:
-            pickle.dump(result, f, protocol=4)
+            pickle.dump((result, seconds), f, protocol=4)
         os.replace(tmp, store)
         run.reused[name] = False
     run.results[name] = result
-    run.seconds[name] = time.perf_counter() - t0
+    run.seconds[name] = seconds
     return result
 
 
@@ -119,7 +128,7 @@ def tolerance_spread(
         noise = rng.normal(0.0, sigma, samples)
         i = index(name)
         params[i] = params[i] * (1 + noise) if kind == "rel" else params[i] + noise
-    loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
+    loop = angle_grid(2 * np.pi / TOLERANCE_LOOP)
     theta = np.tile(loop, samples)
     eq = solve_equilibria(model, np.repeat(params, len(loop), axis=1), theta, theta)
     rest = np.array([design.robot.free_length, 0.0, 0.0])
@@ -159,6 +168,7 @@ def sha256(path: Path) -> str:
     return h.hexdigest()
 
 
+@lru_cache(maxsize=1)
 def versions() -> dict[str, str]:
     """Python, key packages and the project's git commit (if known)."""
     import casadi
@@ -287,8 +297,11 @@ def _diagnose(data: Path) -> dict[str, Any]:
     return diagnose(design, m).to_json()
 
 
-def write_manifest(run: Run, study_path: Path | None, data: Path | None, seed: int) -> Path:
-    """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file."""
+def write_manifest(
+    run: Run, study_path: Path | None, data: Path | None, seed: int, failed: str = ""
+) -> Path:
+    """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file
+    (and the stage that failed, if one did: the files listed are those still valid)."""
     inputs: dict[str, Any] = {
         "study": {
             "path": str(study_path) if study_path else "embedded default study",
@@ -307,6 +320,7 @@ def write_manifest(run: Run, study_path: Path | None, data: Path | None, seed: i
         "inputs": inputs,
         "versions": versions(),
         "seeds": {"tolerance": seed, "study": run.study.seed},
+        "failed_stage": failed or None,
         "stages": {
             name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
         },

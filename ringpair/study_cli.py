@@ -89,8 +89,12 @@ def study(
             written = write_report(run)
     except StageError as exc:
         err_console.print(f"[bold red]error:[/] {exc}")
-        done = sorted(p for p in out.rglob("*") if p.is_file() and ".stages" not in p.parts)
-        err_console.print(f"files already written and valid: {len(done)} under {out}")
+        if exc.run is not None:
+            manifest = write_manifest(exc.run, study_path, data, seed, failed=exc.stage)
+            done = ", ".join(exc.run.seconds) or "none"
+            err_console.print(
+                f"stages finished before it: {done}; their files are listed in {manifest}"
+            )
         sys.exit(3)
     manifest = write_manifest(run, study_path, data, seed)
     for name, sec in run.seconds.items():

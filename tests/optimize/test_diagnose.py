@@ -45,7 +45,7 @@ def variant(design: Design, face_gap: float, stiffness: float) -> Design:
 SETUPS = {
     # face gap [m] and tube-stiffness factor ranges of the nominal design
     "bench": ((0.060, 0.100), (0.8, 1.25)),  # around the paper's demonstrator
-    "near": ((0.020, 0.030), (3.5, 4.5)),  # magnet face 20-30 mm away, a stiffer rod
+    "near": ((0.015, 0.022), (3.5, 4.5)),  # magnet face 15-22 mm away, a stiffer rod
     "soft": ((0.070, 0.090), (0.25, 0.35)),  # a soft rod: deflections of L / 5
 }
 """Set-ups: the exact field matters only near the magnet and the rod's nonlinearity only
