@@ -29,6 +29,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -294,7 +295,7 @@ class _Problem:
         m: Measurements,
         rows: np.ndarray,
         sigma: np.ndarray,
-        ordered: bool | None,
+        ordered: bool | Literal["driven"] | None,
         priors: bool,
         tip_angles: bool,
         nominal_u: np.ndarray,
@@ -395,7 +396,7 @@ def calibrate(
     initial: Mapping[str, float] | None = None,
     priors: bool = False,
     sigma: float | None = None,
-    ordered: bool | None = None,
+    ordered: bool | Literal["driven"] | None = None,
     tip_angles: bool = True,
     max_nfev: int | None = None,
 ) -> CalibrationResult:

@@ -599,7 +599,8 @@ class StudyResult:
     objective : the study's objective of the best design (the metric in SI for one
         objective, the weighted sum of base-normalised metrics for several).
     metrics : workspace and design metrics of the best design (see METRICS). [SI]
-    base_metrics : the same for the base design (first material combination).
+    base_metrics : the same for the base design as given (its own tube moduli), by
+        forward simulation.
     constraints : every constraint group at the best design.
     active : names of the active groups and free bounds (``bound.<name>.low/high``).
     conflicts : for an infeasible study, the groups that stay violated at the
@@ -1106,7 +1107,7 @@ def solve_study(
             values={},
             materials=(None, None),
             metrics={},
-            base_metrics=norms.metrics,
+            base_metrics=evaluate_design(study, study.base).metrics,
             constraints=(),
             active=(),
             starts=start_results,
@@ -1139,7 +1140,7 @@ def solve_study(
         values=dict(best.start.values),
         materials=best.start.materials,
         metrics=best.metrics,
-        base_metrics=norms.metrics,
+        base_metrics=evaluate_design(study, study.base).metrics,
         constraints=states,
         active=tuple(active),
         starts=start_results,

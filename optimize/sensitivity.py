@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Literal
 
 import casadi as ca
 import numpy as np
@@ -158,7 +159,10 @@ class Prediction:
 
 
 def predict(
-    model: RingPairModel, params: np.ndarray, m: Measurements, ordered: bool | None = None
+    model: RingPairModel,
+    params: np.ndarray,
+    m: Measurements,
+    ordered: bool | Literal["driven"] | None = None,
 ) -> Prediction:
     """Simulate the configurations of ``m`` with ``model`` and parameters ``params`` [SI].
 
@@ -167,7 +171,10 @@ def predict(
         :func:`design.equilibrium.solve_sequence`; default: only when the model has
         ``hysteresis``. Otherwise each configuration is solved from the straight robot.
         For models in PATH_INDEPENDENT the order acts only through the friction play, so
-        the played commands are solved in one batch (the same equilibria, much faster).
+        the played commands are solved in one batch (the same equilibria, much faster,
+        while the robot has one stable equilibrium per configuration). ``"driven"``:
+        follow the path step by step for every model (a robot near a strong magnet can
+        be multistable even without twist; then the state depends on the path).
     """
     if ordered is None:
         ordered = "hysteresis" in model.effects
@@ -183,7 +190,7 @@ def predict(
         applied_o = play(cmd.T, width).T
         jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
         d_o = jac.reshape(len(cmd), 2, 2)
-    if model.effects <= PATH_INDEPENDENT:
+    if model.effects <= PATH_INDEPENDENT and ordered != "driven":
         # the path acts only through the play: one batch solve of the rings' angles
         eq_o = solve_equilibria(model, params, applied_o[:, 0], applied_o[:, 1])
         eq_o = Equilibria(**{**eq_o.__dict__, "command": cmd.copy()})
