@@ -6,6 +6,8 @@ from __future__ import annotations
 import base64
 import html
 import json
+import shutil
+import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -105,7 +107,8 @@ def results(run: Run) -> dict[str, Any]:
 
 
 def write_report(run: Run) -> list[Path]:
-    """``report.html``, ``results.json`` and the figures, in ``run.out``; the paths."""
+    """``report.html``, ``results.json``, the figures and, where Chromium is installed,
+    ``report.pdf`` (the page printed), in ``run.out``; the paths."""
     out = run.out
     figs = out / "figures"
     figs.mkdir(parents=True, exist_ok=True)
@@ -225,4 +228,39 @@ the optimum: {", ".join(str(m) for m in doc["materials"])}.</p>
 """
     write_text(out / "report.html", page)
     write_text(out / "results.json", json.dumps(doc, indent=2, default=float) + "\n")
-    return [*paths, out / "report.html", out / "results.json"]
+    pdf = print_pdf(out / "report.html", out / "report.pdf")
+    return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
+
+
+def browser() -> str | None:
+    """Path of a Chromium that can run headless (Debian package ``chromium``), or None."""
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def print_pdf(page: Path, pdf: Path) -> Path | None:
+    """Print ``page`` to ``pdf`` with headless Chromium; None (nothing written) when
+    Chromium is not installed or fails."""
+    exe = browser()
+    if exe is None:
+        return None
+    try:
+        with atomic_path(pdf) as tmp:
+            subprocess.run(
+                [
+                    exe,
+                    "--headless",
+                    "--disable-gpu",
+                    "--no-sandbox",
+                    "--no-pdf-header-footer",
+                    f"--print-to-pdf={tmp}",
+                    page.resolve().as_uri(),
+                ],
+                check=True,
+                capture_output=True,
+                timeout=180,
+            )
+            if not tmp.read_bytes().startswith(b"%PDF"):
+                raise ValueError("Chromium wrote no PDF")  # atomic_path keeps nothing
+    except (OSError, subprocess.SubprocessError, ValueError):
+        return None
+    return pdf

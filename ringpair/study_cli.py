@@ -99,5 +99,8 @@ def study(
     manifest = write_manifest(run, study_path, data, seed)
     for name, sec in run.seconds.items():
         console.print(f"  {name:10s} {sec:7.1f} s" + ("  (reused)" if run.reused[name] else ""))
-    console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}")
+    pdf = [str(p) for p in written if p.suffix == ".pdf"] or [
+        "no PDF (headless Chromium, Debian package 'chromium', is not installed)"
+    ]
+    console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}, {pdf[0]}")
     console.print(f"done in {time.perf_counter() - t0:.1f} s")

@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from PIL import Image
 from studies import SMALL
 
+from ringpair import report_html
 from ringpair.cli import cli
 
 STUDY = (
@@ -80,6 +81,8 @@ def test_manifest_lists_every_file_and_each_is_valid(study_run):
             assert mesh.is_watertight and mesh.volume > 0, rel
         elif rel.endswith(".step"):
             assert data.startswith(b"ISO-10303-21"), rel
+        elif rel.endswith(".pdf"):
+            assert data.startswith(b"%PDF") and data.rstrip().endswith(b"%%EOF"), rel
     assert any(r.endswith(".step") for r in listed) and any(r.endswith(".stl") for r in listed)
 
 
@@ -98,14 +101,19 @@ def test_bad_study_is_exit_2_and_writes_nothing(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_report_renders_in_headless_chromium(study_run, tmp_path):
-    import shutil
+def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
     import subprocess
 
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    browser = report_html.browser()
     if browser is None:
         pytest.skip("Chromium is not installed (Debian package 'chromium'; .ci/run installs it)")
     _, out, _, _ = study_run
+    # The printed report: every page's images came along (the figures are ~100 kB each).
+    pdf = (out / "report.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF") and len(pdf) > 200_000
+    assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 3
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert "report.pdf" in {f["path"] for f in manifest["files"]}
     shot = tmp_path / "report.png"
     subprocess.run(
         [
