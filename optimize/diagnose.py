@@ -398,6 +398,9 @@ def diagnose(
         position = np.where(np.isfinite(position), position, m.position)
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
+    def refit_current(start: CalibrationResult, cv: bool) -> Fit:
+        return _fit(design, m, current.effects, k=k, seed=seed, cv=cv, starts=[start], sigma=sigma)
+
     s_base = structure(baseline)
     s_current = s_base
     causes: list[Cause] = []
@@ -440,39 +443,18 @@ def diagnose(
         if accepted is None:
             break
         name, f = accepted
-        refitted = name in refit_from
-        refit_from.add(name)
         # A candidate may only have found a better optimum of what the current model can
         # already do (e.g. rigid transmissions are the baseline). Refit the current model
         # from the candidate's estimates: if that closes the gap, the effect is not needed.
-        if not refitted:
+        if name not in refit_from:
+            refit_from.add(name)
             say(f"refitting {current.name} from the estimates of {f.name}")
-            refit = _fit(
-                design,
-                m,
-                current.effects,
-                k=k,
-                seed=seed,
-                cv=False,
-                starts=[f.calibration],
-                sigma=sigma,
-            )
+            refit = refit_current(f.calibration, cv=False)
             if refit.bic() < current.bic() - 1e-6 and not f.bic() - refit.bic() < -BIC_DROP:
-                current = _fit(
-                    design,
-                    m,
-                    current.effects,
-                    k=k,
-                    seed=seed,
-                    cv=True,
-                    starts=[refit.calibration],
-                    sigma=sigma,
-                )
-                if not current.effects:
-                    baseline = current
+                current = refit_current(refit.calibration, cv=True)
                 s_current = structure(current)
                 if not current.effects:
-                    s_base = s_current
+                    baseline, s_base = current, s_current
                 continue
         s_new = structure(f)
         own = {
