@@ -43,6 +43,8 @@ SETTLE_ANGLE = 0.05
 """Perturbation of the tip angles when looking for the state an unstable one falls into. [rad]"""
 SETTLE_RELAXATION = 60
 """Downhill relaxation steps before Newton when settling from an unstable state."""
+ENTRY_STEPS = 16
+"""Load steps in which a driven robot is brought into its loads at the first command."""
 INLINE_LIMIT = 4000
 """Residuals cheaper than this many operations are inlined into the unrolled Newton steps;
 costlier ones are called (smaller C code, faster compilation)."""
@@ -265,9 +267,12 @@ def solve_sequence(
 ) -> Equilibria:
     """Equilibria along an ordered path of commanded angles, as the robot is driven. [rad]
 
-    The first command is solved from the straight robot; each later one is reached in
-    sub-steps of at most SUBSTEP, each Newton solve starting from the previous state, so
-    the robot stays on its branch. With ``hysteresis`` the commands first pass through each
+    At the first command the robot enters its loads as on a bench (the field brought up):
+    every load is ramped from zero in ENTRY_STEPS, each Newton solve starting from the
+    previous state, so the robot starts on the branch connected to the straight rod and
+    not on whichever equilibrium Newton from the straight robot happens to reach (near a
+    strong magnet that can be an unstable one). Each later command is reached in sub-steps
+    of at most SUBSTEP in the same way, so the robot stays on its branch. With ``hysteresis`` the commands first pass through each
     transmission's play (:func:`design.friction.play`). Where the branch ends (Newton fails
     or the state turns unstable) the robot falls into the nearest stable state (Newton from
     small perturbations), and where that or a plain step changes a ring's lag by more than
@@ -284,12 +289,12 @@ def solve_sequence(
         effective = play(command, width)
     solver = BufferEvaluator(newton_function(model))
 
-    def solve(x0: np.ndarray, c: np.ndarray) -> list[np.ndarray]:
-        return [o.ravel() for o in solver(x0, c, params)]
+    def solve(x0: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray]:
+        return [o.ravel() for o in solver(x0, c, p)]
 
     residual = BufferEvaluator(compile_function(model.residual))
 
-    def settle(x: np.ndarray, c: np.ndarray) -> list[np.ndarray] | None:
+    def settle(x: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray] | None:
         """The stable state a real robot falls into from an unstable or lost one: from small
         perturbations of x, relax downhill (x <- x - r/2: -r points down the potential for
         these scaled residuals), then polish by Newton; the nearest stable result."""
@@ -301,17 +306,38 @@ def solve_sequence(
                 xr = x.copy()
                 xr[i] += sign * step
                 for _ in range(SETTLE_RELAXATION):
-                    xr = xr - 0.5 * residual(xr, c, params)[0].ravel()
+                    xr = xr - 0.5 * residual(xr, c, p)[0].ravel()
                 if not np.isfinite(xr).all():
                     continue
-                out = solve(xr, c)
+                out = solve(xr, c, p)
                 dist = np.abs(out[0] - x).max()
                 if _stable(out) and dist < best_dist:
                     best, best_dist = out, dist
         return best
 
-    first = [o[:, 0] for o in _solve_columns(model, params, effective[:, :1])]
+    def enter(c: np.ndarray) -> tuple[list[np.ndarray], bool]:
+        """The state at the first command ``c`` after the loads are ramped up, and whether
+        the robot snapped on the way."""
+        p = params.copy()
+        jumped = False
+        out = None
+        for lam in np.linspace(0.0, 1.0, ENTRY_STEPS + 1)[1:]:
+            p[scale] = lam * params[scale]
+            if out is None:
+                out = [o[:, 0] for o in _solve_columns(model, p.copy(), c[:, None])]
+            else:
+                out = solve(out[0], c, p.copy())
+            if not _stable(out):
+                settled = settle(out[0], c, p.copy()) if np.isfinite(out[0]).all() else None
+                if settled is None:  # lost the branch: the plain solve at full load
+                    return [o[:, 0] for o in _solve_columns(model, params, c[:, None])], True
+                out, jumped = settled, True
+        assert out is not None
+        return out, jumped
+
+    scale = index("load_scale")
     snapped = np.zeros(command.shape[1], bool)
+    first, snapped[0] = enter(effective[:, 0])
     if not _stable(first):
         settled = settle(first[0], effective[:, 0])
         if settled is not None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from design.equilibrium import solve_design, solve_sequence
+from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import RingPairModel
 from design.parameters import index
 from optimize.synth import default_commands, synthesize, synthesize_data
@@ -53,8 +53,32 @@ def test_top_view_keeps_x_and_y_and_tip_angles_on_request(demonstrator):
     np.testing.assert_allclose(m.tip_angles, m.command, atol=1e-12)  # rigid transmissions
 
 
+def test_the_robot_enters_its_loads_on_the_branch_of_the_straight_rod(demonstrator):
+    """A soft rod (1/10 the bending rigidity) at the first bench command: Newton from the
+    straight robot at full load lands on an unstable equilibrium on the far side; the
+    driven robot, brought into the field by ramping the loads, starts stable on the side
+    its small-load deflection points to."""
+    params = RingPairModel.parameters(demonstrator)
+    params[index("bending_rigidity_scale")] = 0.1
+    cmd = default_commands(12)
+    alone = solve_equilibria(RingPairModel(), params, cmd[:1, 0], cmd[:1, 1])
+    assert alone.converged[0] and not alone.stable[0]
+    weak = params.copy()
+    weak[index("load_scale")] = 1e-3
+    side = np.sign(solve_equilibria(RingPairModel(), weak, cmd[:1, 0], cmd[:1, 1]).position[0, 1])
+    driven = solve_sequence(RingPairModel(), params, cmd[:, 0], cmd[:, 1])
+    assert driven.stable.all()
+    assert np.sign(driven.position[0, 1]) == side != np.sign(alone.position[0, 1])
+
+
 def test_unstable_configurations_are_dropped_and_counted(demonstrator):
-    data = synthesize_data(demonstrator, n=12, params_override={"bending_rigidity_scale": 0.1})
+    """A soft rod 30 mm from a strong magnet's centre: some states have no stable
+    neighbour to fall into."""
+    close = {
+        "bending_rigidity_scale": 0.3,
+        "external_center_x": demonstrator.robot.free_length + 0.03,
+    }
+    data = synthesize_data(demonstrator, n=12, params_override=close)
     assert data.dropped >= 1
     assert len(data.measurements) + data.dropped == len(default_commands(12))
     kept = data.measurements.sequence
