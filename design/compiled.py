@@ -97,12 +97,20 @@ class BufferEvaluator:
             self.buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
         for i, o in enumerate(self.outs):
             self.buffer.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
+        self.shapes = [
+            (function.size2_out(i), function.size1_out(i)) for i in range(function.n_out())
+        ]
+
+    def _evaluate(self, args: tuple[ArrayLike, ...]) -> None:
+        for buf, a in zip(self.args, args, strict=True):
+            buf[:] = np.ravel(a, order="F")  # (the assignment converts to float64)
+        self.trigger()
 
     def __call__(self, *args: ArrayLike) -> list[np.ndarray]:
-        for buf, a in zip(self.args, args, strict=True):
-            buf[:] = np.ravel(np.asarray(a, dtype=float), order="F")
-        self.trigger()
-        return [
-            o.reshape(self.function.size2_out(i), self.function.size1_out(i)).T.copy()
-            for i, o in enumerate(self.outs)
-        ]
+        self._evaluate(args)
+        return [o.reshape(shape).T.copy() for o, shape in zip(self.outs, self.shapes)]
+
+    def flat(self, *args: ArrayLike) -> list[np.ndarray]:
+        """As calling, with each output flattened column-major (a copy), shape (nnz,)."""
+        self._evaluate(args)
+        return [o.copy() for o in self.outs]

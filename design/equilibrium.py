@@ -13,6 +13,7 @@ friction play (``hysteresis``) acts on the commands, and a jump to another branc
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -105,7 +106,7 @@ def newton_function(model: RingPairModel) -> ca.Function:
     return compile_function(fn)
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=128)
 def _mapped(model: RingPairModel, size: int) -> ca.Function:
     return newton_function(model).map(size, "thread", THREADS)
 
@@ -126,12 +127,15 @@ def _evaluate(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]
 
 def _chunked(function: Any, args: list[np.ndarray], n: int) -> list[np.ndarray]:
     """Evaluate ``function(size)`` (a mapped CasADi function of ``size`` columns) on the
-    columns of ``args`` in chunks of CHUNK; the last chunk is padded to a multiple of GRAIN
-    columns (few distinct map sizes, little wasted work). Returns (rows, n) outputs."""
+    columns of ``args`` in chunks of CHUNK; the last chunk is padded to a power of two
+    below GRAIN columns and to a multiple of GRAIN above (few distinct map sizes, at most
+    half the work wasted: a path's single configurations must not pay for GRAIN).
+    Returns (rows, n) outputs."""
     outs: list[list[np.ndarray]] = []
     for start in range(0, n, CHUNK):
         stop = min(start + CHUNK, n)
-        size = min(CHUNK, -(-(stop - start) // GRAIN) * GRAIN)
+        count = stop - start
+        size = min(CHUNK, -(-count // GRAIN) * GRAIN, 1 << (count - 1).bit_length())
         pad = size - (stop - start)
         chunk = [a[:, start:stop] for a in args]
         if pad:
@@ -160,7 +164,7 @@ def _run(
     return tuple(_chunked(lambda size: _mapped(model, size), args, n))
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=128)
 def _mapped_initial(model: RingPairModel, size: int) -> ca.Function:
     return model.initial.map(size)
 
@@ -215,7 +219,7 @@ def _solve_columns(
 
 def _stable(out: list[np.ndarray]) -> bool:
     """Converged and stable, for one configuration's solver outputs."""
-    return bool(out[1][0] < TOLERANCE and np.all(out[2] > 0))
+    return bool(out[1][0] < TOLERANCE and out[2].min() > 0)
 
 
 def _equilibria(
@@ -262,6 +266,13 @@ def solve_equilibria(
     return _equilibria(command, _solve_columns(model, np.asarray(params, float), command))
 
 
+@lru_cache(maxsize=128)
+def _path_evaluators(model: RingPairModel, thread: int) -> tuple[BufferEvaluator, BufferEvaluator]:
+    """The single-configuration Newton solver and residual of ``model`` on reusable buffers,
+    one pair per thread (the buffers are not shared between threads)."""
+    return BufferEvaluator(newton_function(model)), BufferEvaluator(compile_function(model.residual))
+
+
 def solve_sequence(
     model: RingPairModel, params: np.ndarray, theta1: ArrayLike, theta2: ArrayLike
 ) -> Equilibria:
@@ -287,12 +298,11 @@ def solve_sequence(
             [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
         )
         effective = play(command, width)
-    solver = BufferEvaluator(newton_function(model))
+    solver, residual = _path_evaluators(model, threading.get_ident())
 
     def solve(x0: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray]:
-        return [o.ravel() for o in solver(x0, c, p)]
+        return solver.flat(x0, c, p)
 
-    residual = BufferEvaluator(compile_function(model.residual))
 
     def settle(x: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray] | None:
         """The stable state a real robot falls into from an unstable or lost one: from small
@@ -347,18 +357,22 @@ def solve_sequence(
         prev = columns[-1]
         a, b = effective[:, k - 1], effective[:, k]
         n_sub = max(1, int(np.ceil(np.abs(b - a).max() / SUBSTEP)))
+        path = a[:, None] + np.outer(b - a, np.arange(n_sub + 1) / n_sub)  # (2, n_sub + 1)
+        lag = prev[5] - a
         for j in range(1, n_sub + 1):
-            c = a + (b - a) * j / n_sub
+            c = path[:, j]
             out = solve(prev[0], c)
-            lag_jump = np.abs((out[5] - c) - (prev[5] - (a + (b - a) * (j - 1) / n_sub)))
-            if not _stable(out) or lag_jump.max() > SNAP_LAG_JUMP:
+            new_lag = out[5] - c
+            stable = _stable(out)
+            if not stable or abs(new_lag - lag).max() > SNAP_LAG_JUMP:
                 snapped[k] = True
-                if not _stable(out):
+                if not stable:
                     settled = settle(out[0] if np.isfinite(out[0]).all() else prev[0], c)
                     if settled is None:
                         settled = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
                     out = settled
-            prev = out
+                    new_lag = out[5] - c
+            prev, lag = out, new_lag
         columns.append(prev)
     outs = [np.column_stack([col[i] for col in columns]) for i in range(6)]
     eq = _equilibria(effective, outs, snapped)
