@@ -270,7 +270,9 @@ def solve_equilibria(
 def _path_evaluators(model: RingPairModel, thread: int) -> tuple[BufferEvaluator, BufferEvaluator]:
     """The single-configuration Newton solver and residual of ``model`` on reusable buffers,
     one pair per thread (the buffers are not shared between threads)."""
-    return BufferEvaluator(newton_function(model)), BufferEvaluator(compile_function(model.residual))
+    return BufferEvaluator(newton_function(model)), BufferEvaluator(
+        compile_function(model.residual)
+    )
 
 
 def solve_sequence(
@@ -283,8 +285,9 @@ def solve_sequence(
     previous state, so the robot starts on the branch connected to the straight rod and
     not on whichever equilibrium Newton from the straight robot happens to reach (near a
     strong magnet that can be an unstable one). Each later command is reached in sub-steps
-    of at most SUBSTEP in the same way, so the robot stays on its branch. With ``hysteresis`` the commands first pass through each
-    transmission's play (:func:`design.friction.play`). Where the branch ends (Newton fails
+    of at most SUBSTEP in the same way, so the robot stays on its branch. With
+    ``hysteresis`` the commands first pass through each transmission's play
+    (:func:`design.friction.play`). Where the branch ends (Newton fails
     or the state turns unstable) the robot falls into the nearest stable state (Newton from
     small perturbations), and where that or a plain step changes a ring's lag by more than
     SNAP_LAG_JUMP, ``snapped`` is set for that command (the first command too, if the robot
@@ -302,7 +305,6 @@ def solve_sequence(
 
     def solve(x0: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray]:
         return solver.flat(x0, c, p)
-
 
     def settle(x: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray] | None:
         """The stable state a real robot falls into from an unstable or lost one: from small

@@ -10,9 +10,11 @@ or is unstable are dropped and counted. SI units are used for all inputs and out
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -65,6 +67,36 @@ class Synthetic:
     equilibria: Equilibria
     dropped: int
     snapped: int
+
+
+SETUPS: dict[str, tuple[tuple[float, float], tuple[float, float]]] = {
+    "bench": ((0.060, 0.100), (0.8, 1.25)),  # around the paper's demonstrator
+    "near": ((0.015, 0.022), (3.5, 4.5)),  # magnet face 15-22 mm away, a stiffer rod
+    "soft": ((0.070, 0.090), (0.25, 0.35)),  # a soft rod: deflections of L / 5
+}
+"""Set-ups a designer meets, as ranges of the external magnet's face gap from the rest tip
+[m] and of a factor on both tubes' Young's moduli [-] (see :func:`setup_variant`): the
+exact field matters only near the magnet and the rod's nonlinearity only at large
+deflections. The diagnosis tests and benchmark draw their nominal designs from these."""
+
+
+def setup_variant(design: Design, face_gap: float, stiffness: float) -> Design:
+    """``design`` with its external magnet's face ``face_gap`` beyond the rest tip on the
+    rod's axis [m] and both tubes' Young's moduli scaled by ``stiffness`` [-]."""
+    em = design.external_magnet
+    centre = (design.robot.free_length + em.length / 2 + face_gap, 0.0, 0.0)
+    robot = design.robot
+    tubes = {
+        t: dataclasses.replace(
+            getattr(robot, t), youngs_modulus=getattr(robot, t).youngs_modulus * stiffness
+        )
+        for t in ("catheter", "wire")
+    }
+    return dataclasses.replace(
+        design,
+        external_magnet=dataclasses.replace(em, center=centre),
+        robot=dataclasses.replace(robot, **tubes),
+    )
 
 
 def true_parameters(design: Design, params_override: Mapping[str, float] | None) -> np.ndarray:
@@ -150,31 +182,6 @@ def synthesize_data(
     )
 
 
-def synthesize(
-    design: Design,
-    effects: Iterable[str] = (),
-    *,
-    commands: np.ndarray | None = None,
-    n: int = DEFAULT_N,
-    view: str = "3d",
-    noise_mm: float = 0.3,
-    seed: int | None = 0,
-    params_override: Mapping[str, float] | None = None,
-    tip_angles: bool = False,
-    angle_noise_deg: float = 1.0,
-    record_sigma: bool = False,
-) -> Measurements:
+def synthesize(design: Design, effects: Iterable[str] = (), **options: Any) -> Measurements:
     """The measurements of :func:`synthesize_data` (same arguments)."""
-    return synthesize_data(
-        design,
-        effects,
-        commands=commands,
-        n=n,
-        view=view,
-        noise_mm=noise_mm,
-        seed=seed,
-        params_override=params_override,
-        tip_angles=tip_angles,
-        angle_noise_deg=angle_noise_deg,
-        record_sigma=record_sigma,
-    ).measurements
+    return synthesize_data(design, effects, **options).measurements

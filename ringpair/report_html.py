@@ -187,6 +187,8 @@ def write_report(run: Run) -> list[Path]:
     else:
         diagnosis = "<p>No measured data were given (<code>ringpair study --data DIR</code>).</p>"
     timing_rows = [[k, f"{v:.1f}"] for k, v in run.seconds.items()]
+    intro = run.study.description.strip()
+    intro = intro if not intro or intro.endswith((".", "!", "?")) else intro + "."
     img = {p.stem: _img(p, p.stem) for p in paths}
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>ringpair study {html.escape(run.study.name)}</title>
@@ -196,7 +198,7 @@ th{{background:#eee}}img{{max-width:100%;margin:4px 0}}.row{{display:flex;gap:8p
 .row img{{max-width:49%;height:auto}}.row{{align-items:flex-start}}</style></head><body>
 <h1>Design study: {html.escape(run.study.name)}</h1>
 <h2 id="setup">Set-up</h2>
-<p>{html.escape(run.study.description)} Study model: {", ".join(doc["model"])}; materials of
+<p>{html.escape(intro)} Study model: {", ".join(doc["model"])}; materials of
 the optimum: {", ".join(str(m) for m in doc["materials"])}.</p>
 <h2 id="designs">Starting vs optimised design</h2>
 {_table(["metric", "start", "optimum"], m_rows)}

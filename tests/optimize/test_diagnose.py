@@ -9,7 +9,6 @@ through the data.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 
 import numpy as np
@@ -18,39 +17,9 @@ import pytest
 from design.designfile import default_design
 from design.params import Design
 from optimize.diagnose import diagnose, residual_structure
-from optimize.synth import synthesize_data
+from optimize.synth import SETUPS, setup_variant, synthesize_data
 
 DEMO = default_design()
-
-
-def variant(design: Design, face_gap: float, stiffness: float) -> Design:
-    """The demonstrator with its external magnet's face ``face_gap`` from the rest tip [m]
-    and both tubes' moduli scaled by ``stiffness`` (a different nominal design)."""
-    em = design.external_magnet
-    centre = (design.robot.free_length + em.length / 2 + face_gap, 0.0, 0.0)
-    robot = design.robot
-    tubes = {
-        t: dataclasses.replace(
-            getattr(robot, t), youngs_modulus=getattr(robot, t).youngs_modulus * stiffness
-        )
-        for t in ("catheter", "wire")
-    }
-    return dataclasses.replace(
-        design,
-        external_magnet=dataclasses.replace(em, center=centre),
-        robot=dataclasses.replace(robot, **tubes),
-    )
-
-
-SETUPS = {
-    # face gap [m] and tube-stiffness factor ranges of the nominal design
-    "bench": ((0.060, 0.100), (0.8, 1.25)),  # around the paper's demonstrator
-    "near": ((0.015, 0.022), (3.5, 4.5)),  # magnet face 15-22 mm away, a stiffer rod
-    "soft": ((0.070, 0.090), (0.25, 0.35)),  # a soft rod: deflections of L / 5
-}
-"""Set-ups: the exact field matters only near the magnet and the rod's nonlinearity only
-at large deflections, so those effects are planted where a designer would meet them, and
-baseline data from the same set-ups must not be taken for them."""
 
 
 def draw(
@@ -61,7 +30,7 @@ def draw(
     magnet placement), and each planted effect at a random plausible strength."""
     rng = np.random.default_rng(seed)
     gap, stiffness = SETUPS[setup]
-    design = variant(DEMO, rng.uniform(*gap), rng.uniform(*stiffness))
+    design = setup_variant(DEMO, rng.uniform(*gap), rng.uniform(*stiffness))
     truth = {
         "bending_rigidity_scale": rng.uniform(0.7, 1.3),
         "external_center_x": design.external_magnet.center[0] + rng.uniform(-3e-3, 3e-3),
