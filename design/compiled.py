@@ -84,6 +84,20 @@ def compile_function(function: ca.Function) -> ca.Function:
     return compiled
 
 
+def evaluate_columns(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]:
+    """Evaluate a mapped function on column-major buffers without DM conversions (which
+    would cost more than the solve itself). Returns each output as (rows, size)."""
+    buf, trigger = function.buffer()
+    flat = [np.asfortranarray(a, dtype=float).ravel(order="F") for a in args]
+    outs = [np.empty(function.nnz_out(i)) for i in range(function.n_out())]
+    for i, a in enumerate(flat):
+        buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
+    for i, o in enumerate(outs):
+        buf.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
+    trigger()
+    return [o.reshape(function.size2_out(i), function.size1_out(i)).T for i, o in enumerate(outs)]
+
+
 class BufferEvaluator:
     """Calls a CasADi function on float64 buffers (no DM conversions, which cost more than
     a compiled evaluation of the rod)."""

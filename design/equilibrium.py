@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from design.compiled import BufferEvaluator, compile_function
+from design.compiled import BufferEvaluator, compile_function, evaluate_columns
 from design.friction import play
 from design.model import RingPairModel
 from design.parameters import index
@@ -111,20 +111,6 @@ def _mapped(model: RingPairModel, size: int) -> ca.Function:
     return newton_function(model).map(size, "thread", THREADS)
 
 
-def _evaluate(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]:
-    """Evaluate a mapped function on column-major buffers without DM conversions (which
-    would cost more than the solve itself). Returns each output as (rows, size)."""
-    buf, trigger = function.buffer()
-    flat = [np.asfortranarray(a).ravel(order="F") for a in args]
-    outs = [np.empty(function.nnz_out(i)) for i in range(function.n_out())]
-    for i, a in enumerate(flat):
-        buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
-    for i, o in enumerate(outs):
-        buf.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
-    trigger()
-    return [o.reshape(function.size2_out(i), function.size1_out(i)).T for i, o in enumerate(outs)]
-
-
 def _chunked(function: Any, args: list[np.ndarray], n: int) -> list[np.ndarray]:
     """Evaluate ``function(size)`` (a mapped CasADi function of ``size`` columns) on the
     columns of ``args`` in chunks of CHUNK; the last chunk is padded to a power of two
@@ -140,7 +126,7 @@ def _chunked(function: Any, args: list[np.ndarray], n: int) -> list[np.ndarray]:
         chunk = [a[:, start:stop] for a in args]
         if pad:
             chunk = [np.pad(a, ((0, 0), (0, pad)), mode="edge") for a in chunk]
-        results = _evaluate(function(size), chunk)
+        results = evaluate_columns(function(size), chunk)
         outs = outs or [[] for _ in results]
         for acc, out in zip(outs, results, strict=True):
             acc.append(out[:, : stop - start])

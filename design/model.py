@@ -27,6 +27,7 @@ used for all inputs and outputs.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -321,7 +322,7 @@ class RingPairModel:
 
     def linear(self) -> RingPairModel:
         """The same model on the linear rod (``large_deflection`` switched off)."""
-        return RingPairModel(self.effects - {"large_deflection"})
+        return model_for(self.effects - {"large_deflection"})
 
     @property
     def name(self) -> str:
@@ -332,3 +333,10 @@ class RingPairModel:
     def parameters(design: Design) -> np.ndarray:
         """Parameter vector of ``design``, shape (n,). [SI]"""
         return parameter_vector(design)
+
+
+@cache
+def model_for(effects: frozenset[str] = frozenset()) -> RingPairModel:
+    """The model with ``effects``, built once per process (building its CasADi functions
+    takes 50-100 ms; models are equal and hash by their effects)."""
+    return RingPairModel(frozenset(effects))

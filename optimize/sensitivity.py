@@ -20,10 +20,10 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from design.compiled import compile_function
+from design.compiled import compile_function, evaluate_columns
 from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.friction import play, play_step
-from design.model import RingPairModel
+from design.model import RingPairModel, model_for
 from design.parameters import NAMES, index
 from optimize.measurements import Measurements
 
@@ -42,7 +42,7 @@ friction play depends on the order. With ``torsion`` (multistable rings) or
 @lru_cache(maxsize=32)
 def model_with(effects: frozenset[str]) -> RingPairModel:
     """One model object per set of effects, so its functions are built once per process."""
-    return RingPairModel(effects)
+    return model_for(frozenset(effects))
 
 
 SENSITIVE = (
@@ -91,7 +91,7 @@ def sensitivity_function(model: RingPairModel) -> ca.Function:
     fn = ca.Function(
         "sensitivity",
         [x, command, prm],
-        [out, d_out],
+        [out, ca.densify(d_out)],  # dense: evaluated on flat buffers
         ["x", "command", "params"],
         ["out", "d_out"],
         {"cse": True},
@@ -120,9 +120,10 @@ def sensitivities(
     if n == 0:
         return np.zeros((0, 5)), np.zeros((0, 5, k))
     fn = _mapped_sensitivity(model, n)
-    out, d_out = fn(unknowns.T, command.T, params)
-    out = np.asarray(out).T
-    d_out = np.asarray(d_out).reshape(5, n, k).transpose(1, 0, 2)
+    columns = [unknowns.T, command.T, np.broadcast_to(params[:, None], (params.size, n))]
+    out, d_out = evaluate_columns(fn, columns)
+    d_out = d_out.reshape(5, n, k).transpose(1, 0, 2)
+    out = out.T
     return out, d_out
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from design.equilibrium import Equilibria, solve_sequence
-from design.model import RingPairModel
+from design.model import RingPairModel, model_for
 from design.parameters import NAMES, index
 from design.params import Design
 from optimize.measurements import Measurements, make_measurements
@@ -148,7 +148,7 @@ def synthesize_data(
         raise ValueError(f"noise_mm must be a finite number >= 0; got {noise_mm!r}")
     if not (np.isfinite(angle_noise_deg) and angle_noise_deg >= 0):
         raise ValueError(f"angle_noise_deg must be a finite number >= 0; got {angle_noise_deg!r}")
-    model = RingPairModel(frozenset(effects))
+    model = model_for(frozenset(effects))
     params = true_parameters(design, params_override)
     cmd = default_commands(n) if commands is None else np.asarray(commands, float).reshape(-1, 2)
     if len(cmd) == 0:
