@@ -40,6 +40,11 @@ SUBSTEP = np.deg2rad(1.0)
 SNAP_LAG_JUMP = 0.1
 """A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
 jump to another branch of equilibria (snap-through). [rad]"""
+MAX_STRIDE = 4
+SMOOTH_LAG_CHANGE = 0.02
+"""Where the lags change by less than this per solve, the path is plainly smooth and is
+followed in strides of up to MAX_STRIDE sub-steps; any larger change, instability or
+failure sends it back to single sub-steps, where snaps are judged. [rad]"""
 SETTLE_ANGLE = 0.05
 """Perturbation of the tip angles when looking for the state an unstable one falls into. [rad]"""
 SETTLE_RELAXATION = 60
@@ -341,18 +346,25 @@ def solve_sequence(
         if settled is not None:
             first, snapped[0] = settled, True
     columns = [first]
+    stride = 1
     for k in range(1, command.shape[1]):
         prev = columns[-1]
         a, b = effective[:, k - 1], effective[:, k]
         n_sub = max(1, int(np.ceil(np.abs(b - a).max() / SUBSTEP)))
         path = a[:, None] + np.outer(b - a, np.arange(n_sub + 1) / n_sub)  # (2, n_sub + 1)
         lag = prev[5] - a
-        for j in range(1, n_sub + 1):
-            c = path[:, j]
+        j = 0
+        while j < n_sub:
+            step = min(stride, n_sub - j)
+            c = path[:, j + step]
             out = solve(prev[0], c)
             new_lag = out[5] - c
             stable = _stable(out)
-            if not stable or abs(new_lag - lag).max() > SNAP_LAG_JUMP:
+            jump = abs(new_lag - lag).max()
+            if step > 1 and not (stable and jump < SMOOTH_LAG_CHANGE):
+                stride = 1  # not plainly smooth: look again in single sub-steps
+                continue
+            if not stable or jump > SNAP_LAG_JUMP:
                 snapped[k] = True
                 if not stable:
                     settled = settle(out[0] if np.isfinite(out[0]).all() else prev[0], c)
@@ -360,7 +372,9 @@ def solve_sequence(
                         settled = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
                     out = settled
                     new_lag = out[5] - c
+            stride = min(2 * stride, MAX_STRIDE) if jump < SMOOTH_LAG_CHANGE / 2 else 1
             prev, lag = out, new_lag
+            j += step
         columns.append(prev)
     outs = [np.column_stack([col[i] for col in columns]) for i in range(6)]
     eq = _equilibria(effective, outs, snapped)

@@ -226,3 +226,22 @@ def test_snap_through_of_coupled_rings_at_the_closed_form_fold(rod):
     d = eq.tip_angles[:, 0] - eq.tip_angles[:, 1]
     assert np.abs(d).min() > d_f - 0.02  # the rings never pass through parallel
     np.testing.assert_allclose(d - path, kappa * np.sin(d), atol=1e-9)
+
+
+def test_strides_on_smooth_stretches_give_the_states_of_single_sub_steps(monkeypatch):
+    """solve_sequence strides over plainly smooth stretches of the path; where the lags
+    change faster it goes back to 1-degree sub-steps. On the bench path of a soft rod with
+    twisting transmissions (which snaps), the states and the snaps are those of 1-degree
+    steps all the way."""
+    import design.equilibrium as equilibrium
+    from optimize.synth import default_commands
+
+    model = RingPairModel(frozenset({"torsion", "large_deflection"}))
+    params = set_params(model.parameters(DEMO), bending_rigidity_scale=0.3)
+    cmd = default_commands(60)
+    strided = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    monkeypatch.setattr(equilibrium, "MAX_STRIDE", 1)
+    single = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    assert single.snapped.any() and single.stable.all()
+    np.testing.assert_array_equal(strided.snapped, single.snapped)
+    np.testing.assert_allclose(strided.position, single.position, rtol=0, atol=1e-12)
