@@ -34,12 +34,8 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 from design.workspace import sweep_workspace  # noqa: E402
-from optimize.nlp import (  # noqa: E402
-    design_with,
-    evaluate_design,
-    material_combinations,
-    solve_study,
-)
+from optimize.nlp import evaluate_design, solve_study  # noqa: E402
+from optimize.nlp_designs import design_with, material_combinations  # noqa: E402
 from optimize.study import default_study  # noqa: E402
 
 PENALTY = 10.0

@@ -1,0 +1,145 @@
+"""Designs and values of a study: the free quantities of a design, the design with given
+values (tube sections and materials kept consistent), the material combinations to try,
+and the bounds of each constraint group. SI units."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from design.parameters import index, parameter_vector
+from design.params import Design
+from optimize.materials import Material, material
+from optimize.study import PARETO_QUANTITIES, Study
+
+
+def free_values(study: Study, design: Design) -> np.ndarray:
+    """Values of the study's free quantities on ``design``, shape (n_free,). [SI]"""
+    p = parameter_vector(design)
+    out = []
+    for b in study.free:
+        if b.name == "external_distance":
+            centre = np.asarray(design.external_magnet.center)
+            out.append(float(np.linalg.norm(centre - [design.robot.free_length, 0, 0])))
+        else:
+            out.append(float(p[index(b.name)]))
+    return np.array(out)
+
+
+def design_with(
+    study: Study,
+    values: Mapping[str, float] | np.ndarray,
+    catheter: Material | None = None,
+    wire: Material | None = None,
+    name: str | None = None,
+) -> Design:
+    """The base design with the free quantities set to ``values`` (SI, by name or in the
+    order of ``study.free``) and the tubes made of the given materials."""
+    if not isinstance(values, Mapping):
+        values = {b.name: float(x) for b, x in zip(study.free, values, strict=True)}
+    base = study.base
+
+    def tube(t: Any, prefix: str, m: Material | None) -> Any:
+        if m is not None:
+            t = replace(
+                t, youngs_modulus=m.youngs_modulus, poisson_ratio=m.poisson_ratio, density=m.density
+            )
+        keys = {
+            "outer_diameter": f"{prefix}_outer_diameter",
+            "inner_diameter": f"{prefix}_inner_diameter",
+            "youngs_modulus": f"{prefix}_youngs_modulus",
+        }
+        return replace(t, **{f: float(values[k]) for f, k in keys.items() if k in values})
+
+    robot = replace(
+        base.robot,
+        catheter=tube(base.robot.catheter, "catheter", catheter),
+        wire=tube(base.robot.wire, "wire", wire),
+    )
+    tip_keys = {
+        "magnet_outer_diameter": "ring_outer_diameter",
+        "magnet_inner_diameter": "ring_inner_diameter",
+        "magnet_length": "ring_length",
+        "gap": "ring_gap",
+    }
+    tip = replace(base.tip, **{f: float(values[k]) for f, k in tip_keys.items() if k in values})
+    ext = base.external_magnet
+    if "external_distance" in values:
+        rest = np.array([base.robot.free_length, 0.0, 0.0])
+        direction = np.asarray(ext.center) - rest
+        direction /= np.linalg.norm(direction)
+        centre = rest + float(values["external_distance"]) * direction
+        ext = replace(ext, center=(float(centre[0]), float(centre[1]), float(centre[2])))
+    return replace(
+        base,
+        name=name or base.name,
+        robot=robot,
+        tip=tip,
+        external_magnet=ext,
+    )
+
+
+def material_combinations(study: Study) -> list[tuple[Material | None, Material | None]]:
+    """Every (catheter, wire) material pair of the study (None keeps the base tube)."""
+    cat: list[Material | None] = [material(m) for m in study.catheter_materials] or [None]
+    wire: list[Material | None] = [material(m) for m in study.wire_materials] or [None]
+    return list(itertools.product(cat, wire))
+
+
+def _strain_limits(
+    study: Study, cat: Material | None, wire: Material | None
+) -> tuple[float, float]:
+    lim = study.limits
+    out = []
+    for override, m in ((lim.catheter_max_strain, cat), (lim.wire_max_strain, wire)):
+        if override is not None:
+            out.append(override)
+        elif m is not None:
+            out.append(m.allowable_strain)
+        else:  # the study validation requires one of them
+            raise ValueError("a tube without material needs a max strain")
+    return out[0], out[1]
+
+
+def group_bounds(
+    study: Study,
+    cat: Material | None,
+    wire: Material | None,
+    epsilon: Mapping[str, float] | None,
+) -> dict[str, tuple[float, float]]:
+    """(lower, upper) of every constraint group, SI."""
+    lim = study.limits
+    inf = math.inf
+    strain_c, strain_w = _strain_limits(study, cat, wire)
+    out = {
+        "strain.catheter": (-inf, strain_c),
+        "strain.wire": (-inf, strain_w),
+        "twist.wire": (-lim.twist_limit, lim.twist_limit),
+        "twist.catheter": (-lim.twist_limit, lim.twist_limit),
+        "neutral": (-inf, lim.neutral_tolerance),
+        "magnet_clearance": (lim.magnet_clearance, inf),
+        "ring_on_wire": (lim.wire_clearance, inf),
+        "wire_in_catheter": (lim.wire_clearance, inf),
+        "ring_wall": (lim.min_wall, inf),
+        "catheter_wall": (lim.min_wall, inf),
+        "ring_diameter": (-inf, lim.max_outer_diameter),
+        "catheter_diameter": (-inf, lim.max_outer_diameter),
+        "epsilon.catheter_outer_diameter": (-inf, inf),
+        "epsilon.external_distance": (-inf, inf),
+        "epsilon.magnet_volume": (-inf, inf),
+        "min_disc_radius": (lim.min_disc_radius or -inf, inf),
+        "min_reach_ratio": (lim.min_reach_ratio or -inf, inf),
+    }
+    for name, value in (epsilon or {}).items():
+        if name not in PARETO_QUANTITIES:
+            raise ValueError(
+                f"epsilon bound on {name!r}; expected one of {', '.join(PARETO_QUANTITIES)}"
+            )
+        sense = PARETO_QUANTITIES[name][2]
+        out[f"epsilon.{name}"] = (-inf, value) if sense == "max" else (value, inf)
+    return out
