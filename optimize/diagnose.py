@@ -19,6 +19,11 @@ Method (the result format is spec/formats.md's diagnosis JSON):
 4. Name each accepted cause with its evidence (the residual structure it removes, the
    fitted parameters, the cross-validated gain), and say whether structure remains.
 
+Data with an acquisition order are fitted along the bench's path wherever that changes
+the states (a multistable robot), and each full fit of such data also scans the misfit
+along the path around its estimate (:func:`_scan`): snap-throughs make it jump, which a
+local least-squares fit cannot see.
+
 The candidates are only ever judged through the data: the same fits, the same thresholds
 for each. SI units inside; the ``*_mm`` figures are millimetres.
 """
@@ -34,7 +39,8 @@ from typing import Literal
 import numpy as np
 from scipy import stats
 
-from design.model import EFFECTS
+from design.model import EFFECTS, RingPairModel
+from design.parameters import index
 from design.params import Design
 from design.sections import tube_torsional_rigidity
 from optimize.calibrate import (
@@ -56,6 +62,9 @@ BIC_DROP = 10.0
 strong evidence)."""
 CV_GAIN = 0.03
 """... and its cross-validated RMSE falls by more than this fraction."""
+SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
+"""Factors on each positive (log-fitted) parameter, alone and with the others of its
+effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
 SCREEN_EVALUATIONS = 12
 """Model evaluations of a screening fit (a candidate's BIC before it is fitted in full)."""
 STRUCTURE_P = 1e-3
@@ -313,9 +322,14 @@ def _fit(
         fits.append((cal, path))
         if path_matters(model.parameters(design) if s is None else s.params):
             fits.append(fit(initial, "driven"))
-    cal, options["ordered"] = min(
-        fits, key=lambda f: f[0].chi2 if f[0].unconverged == 0 else math.inf
-    )
+    cal, path = min(fits, key=lambda f: f[0].chi2 if f[0].unconverged == 0 else math.inf)
+    if m.sequence is not None and max_nfev is None:  # full fits of data with a path
+        start = _scan(model, m, cal, free)
+        if start is not None:
+            scanned, _ = fit(start, "driven")
+            if scanned.unconverged == 0 and scanned.chi2 < cal.chi2:
+                cal = scanned
+    options["ordered"] = path
     initial = {n: cal.estimate[n] for n in free}
     e = cal.errors[np.isfinite(cal.errors)]
     n = int(m.measured.sum())
@@ -328,6 +342,45 @@ def _fit(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
         ).rmse_mm
     return Fit(effects, cal, cv_rmse, rss, n)
+
+
+def _scan(
+    model: RingPairModel, m: Measurements, cal: CalibrationResult, free: Sequence[str]
+) -> dict[str, float] | None:
+    """A better start for a fit along the path, or None.
+
+    Driven along a path, the robot snaps (or not) from one branch to another, so the misfit
+    jumps where a parameter crosses a snap: a local fit stops at the edge of its basin
+    (e.g. transmissions fitted too stiff to snap where the bench did). Evaluate the misfit
+    along the path at the estimate with each positive parameter scaled by SCAN_FACTORS,
+    alone and together with the others of its effect (both transmissions); return the best
+    point if it beats the estimate."""
+    groups = [[n] for n in free if FREE_PARAMETERS[n].kind == "log"]
+    groups += [
+        [n for n in names if n in free]
+        for names in EFFECT_FREE.values()
+        if sum(n in free and FREE_PARAMETERS[n].kind == "log" for n in names) > 1
+    ]
+    measured = np.isfinite(m.position)
+
+    def misfit(params: np.ndarray) -> float:
+        position = predict(model, params, m, ordered="driven").equilibria.position
+        r = (position - m.position)[measured]
+        return float(np.sum(r**2)) if np.isfinite(r).all() else math.inf
+
+    best, best_value = None, misfit(cal.params)
+    for group in groups:
+        for factor in SCAN_FACTORS:
+            params = cal.params.copy()
+            for name in group:
+                spec = FREE_PARAMETERS[name]
+                params[index(name)] = np.clip(params[index(name)] * factor, spec.lower, spec.upper)
+            value = misfit(params)
+            if value < best_value:
+                best, best_value = params, value
+    if best is None:
+        return None
+    return {n: float(best[index(n)]) for n in free}
 
 
 def _noise_consistent(fit: Fit, m: Measurements) -> bool:
