@@ -82,9 +82,18 @@ def test_diagnosis_names_the_planted_effect_and_recovers_its_parameters(planted,
         if name in truth and not name.startswith(("external", "bending")):
             err = abs(final.estimate[name] - truth[name])
             assert err < 4 * final.standard_error[name] + 1e-9, f"{name}: {why}"
-    assert result.final.cv_rmse_mm < 0.8 * result.baseline.cv_rmse_mm, why
-    # What is left is the noise: RMS distance ~ noise sqrt(number of measured axes).
+    # What is left is the noise: RMS distance ~ noise sqrt(number of measured axes). The
+    # gain: the final model removes at least half of the baseline's cross-validated mean
+    # square error beyond the noise (a weak effect, e.g. the exact field 22 mm from the
+    # magnet, leaves little beyond the noise to remove, so a fixed ratio would not do).
     axes = 3 if view == "3d" else 2
+    noise_ms = (noise * np.sqrt(axes)) ** 2
+
+    def excess(fit):
+        return fit.cv_rmse_mm**2 - noise_ms
+
+    assert result.final.cv_rmse_mm < result.baseline.cv_rmse_mm, why
+    assert excess(result.final) < 0.5 * excess(result.baseline), why
     assert result.final.calibration.rmse_mm < 1.5 * noise * np.sqrt(axes), why
     assert all(c.evidence.startswith(c.name) for c in result.causes)
     doc = result.to_json()
