@@ -327,13 +327,14 @@ def solve_sequence(
         for lam in np.linspace(0.0, 1.0, ENTRY_STEPS + 1)[1:]:
             p[scale] = lam * params[scale]
             if out is None:
-                out = [o[:, 0] for o in _solve_columns(model, p.copy(), c[:, None])]
+                out = [o[:, 0] for o in _solve_columns(model, p, c[:, None])]
             else:
-                out = solve(out[0], c, p.copy())
+                out = solve(out[0], c, p)
             if not _stable(out):
-                settled = settle(out[0], c, p.copy()) if np.isfinite(out[0]).all() else None
+                settled = settle(out[0], c, p) if np.isfinite(out[0]).all() else None
                 if settled is None:  # lost the branch: the plain solve at full load
-                    return [o[:, 0] for o in _solve_columns(model, params, c[:, None])], True
+                    plain = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
+                    return (plain if _stable(plain) else settle(plain[0], c) or plain), True
                 out, jumped = settled, True
         assert out is not None
         return out, jumped
@@ -341,10 +342,6 @@ def solve_sequence(
     scale = index("load_scale")
     snapped = np.zeros(command.shape[1], bool)
     first, snapped[0] = enter(effective[:, 0])
-    if not _stable(first):
-        settled = settle(first[0], effective[:, 0])
-        if settled is not None:
-            first, snapped[0] = settled, True
     columns = [first]
     stride = 1
     for k in range(1, command.shape[1]):

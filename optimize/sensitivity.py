@@ -39,7 +39,6 @@ friction play depends on the order. With ``torsion`` (multistable rings) or
 ``large_deflection`` the path itself is followed."""
 
 
-@lru_cache(maxsize=32)
 def model_with(effects: frozenset[str]) -> RingPairModel:
     """One model object per set of effects, so its functions are built once per process."""
     return model_for(frozenset(effects))
