@@ -55,6 +55,7 @@ from optimize.calibrate import (
     row_sigma,
 )
 from optimize.measurements import Measurements
+from optimize.profile import Interval, profile_intervals
 
 MM = 1e-3
 BIC_DROP = 10.0
@@ -99,6 +100,8 @@ class Fit:
     cv_rmse_mm: float
     rss: float
     n: int
+    ordered: bool | Literal["driven"] = False
+    """How the fit solved the configurations (see :func:`optimize.calibrate.predict`)."""
 
     @property
     def name(self) -> str:
@@ -123,11 +126,19 @@ class Fit:
 
 @dataclass(frozen=True)
 class Cause:
-    """An accepted effect: its fit, the structure it removed and one sentence of evidence."""
+    """An accepted effect.
+
+    fit : the model it was accepted with (its cv_rmse_mm is the cause's).
+    params : its own parameters in the final model, report units (``name_<unit>``), with
+        the physical quantity behind each scale factor (e.g. the wire's torsional rigidity).
+    intervals : 1-sigma profile-likelihood interval of each of ``params``, report units.
+    evidence : one sentence: the structure it removed, the gain, the parameters.
+    """
 
     name: str
     fit: Fit
     params: dict[str, float]
+    intervals: dict[str, tuple[float, float]]
     evidence: str
 
 
@@ -157,6 +168,7 @@ class Diagnosis:
     def to_json(self) -> dict[str, object]:
         """The diagnosis JSON of spec/formats.md, with optional extra keys."""
         base, final = self.baseline.summary(), self.final.summary()
+        final["interval"] = {k: list(v) for c in self.causes for k, v in c.intervals.items()}
         ratio = self.final.cv_rmse_mm / self.baseline.cv_rmse_mm
         return {
             "baseline": base,
@@ -164,6 +176,7 @@ class Diagnosis:
                 {
                     "name": c.name,
                     "params": c.params,
+                    "interval": {k: list(v) for k, v in c.intervals.items()},
                     "cv_rmse_mm": c.fit.cv_rmse_mm,
                     "evidence": c.evidence,
                 }
@@ -189,13 +202,19 @@ class Diagnosis:
         }
 
 
+def report_key(name: str) -> tuple[str, float]:
+    """A free parameter's report key ``name`` or ``name_<unit>`` (mm, deg, g...) and the
+    factor from SI to that unit."""
+    label, factor = FREE_PARAMETERS[name].label
+    return (f"{name}_{label.lower()}" if label else name), factor
+
+
 def parameter_values(fit: CalibrationResult, standard_error: bool = False) -> dict[str, float]:
-    """Fitted parameters in report units, keyed ``name`` or ``name_<unit>`` (mm, deg, g...)."""
+    """Fitted parameters in report units, by :func:`report_key`."""
     values = fit.standard_error if standard_error else fit.estimate
     out = {}
     for name in fit.names:
-        label, factor = FREE_PARAMETERS[name].label
-        key = f"{name}_{label.lower()}" if label else name
+        key, factor = report_key(name)
         out[key] = float(values[name] * factor)
     return out
 
@@ -328,7 +347,7 @@ def _fit(
         if start is not None:
             scanned, _ = fit(start, "driven")
             if scanned.unconverged == 0 and scanned.chi2 < cal.chi2:
-                cal = scanned
+                cal, path = scanned, "driven"
     options["ordered"] = path
     initial = {n: cal.estimate[n] for n in free}
     e = cal.errors[np.isfinite(cal.errors)]
@@ -341,7 +360,7 @@ def _fit(
         cv_rmse = cross_validate(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
         ).rmse_mm
-    return Fit(effects, cal, cv_rmse, rss, n)
+    return Fit(effects, cal, cv_rmse, rss, n, path)
 
 
 def _scan(
@@ -390,15 +409,34 @@ def _noise_consistent(fit: Fit, m: Measurements) -> bool:
     return bool(stats.chi2.sf(fit.calibration.chi2, fit.calibration.dof) > NOISE_P)
 
 
-def _evidence(
-    name: str, before: Fit, after: Fit, s0: Sequence[Structure], s1: Sequence[Structure]
-) -> str:
+def _cause(
+    design: Design,
+    name: str,
+    before: Fit,
+    after: Fit,
+    s0: Sequence[Structure],
+    s1: Sequence[Structure],
+    final: Fit,
+    profiles: Mapping[str, Interval],
+) -> Cause:
+    """The accepted effect ``name`` (``before`` -> ``after``, structure ``s0`` -> ``s1``),
+    its parameters as the ``final`` model estimates them, with their ``profiles``."""
+    params: dict[str, float] = {}
+    intervals: dict[str, tuple[float, float]] = {}
+    for p in EFFECT_FREE[name]:
+        key, factor = report_key(p)
+        params[key] = final.calibration.estimate[p] * factor
+        intervals[key] = (profiles[p].lower * factor, profiles[p].upper * factor)
+        if p.endswith("_torsion_scale"):  # the physical quantity behind the factor
+            tube = p.removesuffix("_torsion_scale")
+            gj = tube_torsional_rigidity(getattr(design.robot, tube))
+            params[f"{tube}_torsional_rigidity_n_m2"] = params[key] * gj
+            intervals[f"{tube}_torsional_rigidity_n_m2"] = (
+                intervals[key][0] * gj,
+                intervals[key][1] * gj,
+            )
     r2_after = {s.feature: s.r2 for s in s1}
     drops = [(s.r2 - r2_after.get(s.feature, 0.0), s) for s in s0 if s.p_value < STRUCTURE_P]
-    own = parameter_values(after.calibration)
-    se = parameter_values(after.calibration, standard_error=True)
-    shown = [k for k in own if any(k.startswith(p) for p in EFFECT_FREE[name])]
-    params = ", ".join(f"{k} = {own[k]:.4g} +- {se[k]:.2g}" for k in shown)
     text = f"{name}: "
     if drops:
         drop, s = max(drops, key=lambda t: t[0])
@@ -413,8 +451,11 @@ def _evidence(
         f"{after.cv_rmse_mm:.3g} mm (BIC {after.bic() - before.bic():+.0f})"
     )
     if params:
-        text += f", with {params}"
-    return text + "."
+        text += ", with " + ", ".join(
+            f"{k} = {v:.4g} (1 sigma {intervals[k][0]:.3g} to {intervals[k][1]:.3g})"
+            for k, v in params.items()
+        )
+    return Cause(name, after, params, intervals, text + ".")
 
 
 def diagnose(
@@ -456,7 +497,7 @@ def diagnose(
 
     s_base = structure(baseline)
     s_current = s_base
-    causes: list[Cause] = []
+    accepted_steps: list[tuple[str, Fit, Fit, tuple[Structure, ...], tuple[Structure, ...]]] = []
     tried: dict[str, tuple[float, float]] = {baseline.name: (baseline.bic(), baseline.cv_rmse_mm)}
     remaining = list(candidates)
     refit_from: set[str] = set()  # candidates whose estimates the current model was refitted from
@@ -510,18 +551,21 @@ def diagnose(
                     baseline, s_base = current, s_current
                 continue
         s_new = structure(f)
-        own = {
-            k_: v
-            for k_, v in parameter_values(f.calibration).items()
-            if any(k_.startswith(p) for p in EFFECT_FREE[name])
-        }
-        for tube in ("wire", "catheter"):  # the physical quantity behind each factor
-            if f"{tube}_torsion_scale" in own:
-                gj = tube_torsional_rigidity(getattr(design.robot, tube))
-                own[f"{tube}_torsional_rigidity_n_m2"] = own[f"{tube}_torsion_scale"] * gj
-        causes.append(Cause(name, f, own, _evidence(name, current, f, s_current, s_new)))
+        accepted_steps.append((name, current, f, s_current, s_new))
         current, s_current = f, s_new
         remaining.remove(name)
+
+    # The causes' parameters as the final model estimates them, with profile-likelihood
+    # intervals: the linearised errors are too small where parameters trade off along a
+    # curved valley (optimize.profile).
+    own = [p for step in accepted_steps for p in EFFECT_FREE[step[0]]]
+    profiles = {}
+    if own:
+        say("profile-likelihood intervals of " + ", ".join(own))
+        profiles = profile_intervals(
+            design, m, current.calibration, own, ordered=current.ordered, sigma=sigma
+        )
+    causes = [_cause(design, *step, current, profiles) for step in accepted_steps]
 
     left = [s for s in s_current if s.p_value < STRUCTURE_P]
     unexplained = ""

@@ -123,9 +123,17 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
         )
         for name, f in fits
     )
-    params = _row(["parameter", "estimate", "standard error"], "th") + "".join(
-        _row([html.escape(k), f"{v:.5g}", f"{d.final.summary()['uncertainty'][k]:.2g}"])  # type: ignore[index]
-        for k, v in d.final.summary()["params"].items()  # type: ignore[attr-defined]
+    final = d.to_json()["final"]
+    intervals: dict[str, list[float]] = final["interval"]  # type: ignore[assignment]
+
+    def interval(key: str) -> str:
+        return f"{intervals[key][0]:.4g} to {intervals[key][1]:.4g}" if key in intervals else ""
+
+    params = _row(
+        ["parameter", "estimate", "standard error", "1-sigma profile interval"], "th"
+    ) + "".join(
+        _row([html.escape(k), f"{v:.5g}", f"{final['uncertainty'][k]:.2g}", interval(k)])  # type: ignore[index]
+        for k, v in final["params"].items()  # type: ignore[attr-defined]
     )
     causes = (
         "".join(f"<li>{html.escape(c.evidence)}</li>" for c in d.causes)
@@ -143,6 +151,8 @@ th{{background:#eee}}</style></head><body>
 <h2>Causes</h2><ul>{causes}</ul>{left}
 <h2>Error</h2><table>{table}</table>
 <h2>Fitted parameters of the final model</h2><table>{params}</table>
+<p>Standard errors are linearised (Gauss-Newton); the profile-likelihood intervals of the
+causes' parameters hold where parameters trade off along a curved valley.</p>
 <h2>Residuals</h2>{_img(residuals)}{_img(positions)}
 </body></html>
 """

@@ -191,9 +191,13 @@ def test_diagnose_writes_the_spec_json_and_report(tmp_path):
     for block in ("baseline", "final"):
         assert set(doc[block]) >= {"rmse_mm", "max_abs_mm", "cv_rmse_mm", "params"}
     assert doc["gain"]["cv_rmse_ratio"] < 0.5
+    lower, upper = doc["causes"][0]["interval"]["tip_mass_g"]
+    assert lower <= doc["causes"][0]["params"]["tip_mass_g"] <= upper
+    assert doc["final"]["interval"]["tip_mass_g"] == [lower, upper]
     assert "gravity" in result.output
     page = (tmp_path / "r" / "diagnosis.html").read_text()
     assert page.count("data:image/png;base64,") == 2 and "gravity" in page
+    assert "profile interval" in page and f"{lower:.4g} to {upper:.4g}" in page
     img = np.asarray(Image.open(tmp_path / "r" / "residuals.png").convert("L"))
     assert (img < 128).mean() > 0.005
 

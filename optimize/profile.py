@@ -1,0 +1,209 @@
+"""Profile-likelihood intervals of calibrated parameters.
+
+The Gauss-Newton standard error of :func:`optimize.calibrate.calibrate` is exact only
+where the model is linear in its parameters over the error's range. Where parameters
+trade off along a curved valley (a far, weak external field: the rod's compliance and the
+magnet's distance are nearly degenerate, and the transmissions' torsional rigidities
+follow them), it can be several times too small. The profile likelihood does not assume
+linearity: fix one parameter at a value, refit all the others, and compare the misfit
+(Venzon & Moolgavkar 1988; Raue et al. 2009, Bioinformatics 25:1923). With
+s^2 = chi^2 / dof of the best fit, the 1-sigma interval is where
+
+    r(p) = sign(p - p_hat) sqrt((chi^2_profile(p) - chi^2_min) / s^2)
+
+crosses -1 and +1. r is linear in the fit unit (log for positive quantities) for a
+quadratic misfit, so a secant on r finds each end in a few fits; a bracket keeps it safe
+where r is not linear (snap-throughs along a path). An end that the parameter's bound
+cuts off is the bound.
+
+SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from design.params import Design
+from optimize.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
+from optimize.measurements import Measurements
+
+TOLERANCE = 0.05
+"""An interval end is found when |r| is within this of 1. [-]"""
+MAX_FITS = 6
+"""Refits per interval end at most."""
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A 1-sigma profile-likelihood interval of one parameter.
+
+    lower, upper : the interval's ends; a bound of the parameter where the profile does
+        not reach 1 sigma before it. [SI]
+    fits : refits it took.
+    """
+
+    lower: float
+    upper: float
+    fits: int
+
+    def half_width(self, estimate: float, toward: float) -> float:
+        """The interval's half-width on the side of ``toward``. [SI]"""
+        return self.upper - estimate if toward >= estimate else estimate - self.lower
+
+
+def _to_u(name: str, value: float) -> float:
+    return (
+        math.log(value)
+        if FREE_PARAMETERS[name].kind == "log"
+        else value / FREE_PARAMETERS[name].unit
+    )
+
+
+def _from_u(name: str, u: float) -> float:
+    return math.exp(u) if FREE_PARAMETERS[name].kind == "log" else u * FREE_PARAMETERS[name].unit
+
+
+def _range(name: str, nominal: float) -> tuple[float, float]:
+    """The values the fit admits for ``name`` (its absolute bounds and span). [SI]"""
+    spec = FREE_PARAMETERS[name]
+    return max(spec.lower, nominal - spec.span), min(spec.upper, nominal + spec.span)
+
+
+def profile_intervals(
+    design: Design,
+    m: Measurements,
+    fit: CalibrationResult,
+    names: Iterable[str],
+    *,
+    ordered: bool | Literal["driven"] | None = None,
+    sigma: float | None = None,
+) -> dict[str, Interval]:
+    """1-sigma profile-likelihood intervals of ``names`` (free parameters of ``fit``).
+
+    ordered, sigma : as the fit was made (see :func:`optimize.calibrate.calibrate`).
+    """
+    free = fit.names
+    out = {}
+    for name in names:
+        if name not in free:
+            raise ValueError(f"{name!r} is not a free parameter of the fit ({list(free)})")
+        rest = tuple(n for n in free if n != name)
+        lo, hi = _range(name, fit.nominal[name])
+        u_hat = _to_u(name, fit.estimate[name])
+        # The linear standard error in fit units: the first step of each end's search.
+        spec = FREE_PARAMETERS[name]
+        se = fit.standard_error[name] / (fit.estimate[name] if spec.kind == "log" else spec.unit)
+        se = se if np.isfinite(se) and se > 0 else spec.prior
+        fits = 0
+        ends = []
+        for sign, bound in ((-1.0, lo), (1.0, hi)):
+            end, n = _end(design, m, fit, name, rest, u_hat, sign, se, bound, ordered, sigma)
+            ends.append(end)
+            fits += n
+        out[name] = Interval(ends[0], ends[1], fits)
+    return out
+
+
+def profile_sigma(
+    design: Design,
+    m: Measurements,
+    fit: CalibrationResult,
+    name: str,
+    value: float,
+    *,
+    ordered: bool | Literal["driven"] | None = None,
+    sigma: float | None = None,
+    starts: Sequence[Mapping[str, float]] = (),
+) -> float:
+    """r at ``value`` of ``name``: how many sigma of the profile likelihood it lies from
+    ``fit``'s estimate (signed; |r| > 4 rejects it at the 4-sigma level). The others are
+    refitted from ``fit``'s estimates and from each of ``starts`` (SI values by name), the
+    best counts. [-]"""
+    rest = tuple(n for n in fit.names if n != name)
+    r, _ = _refit(design, m, fit, name, value, rest, [fit.estimate, *starts], ordered, sigma)
+    return r
+
+
+def _refit(
+    design: Design,
+    m: Measurements,
+    fit: CalibrationResult,
+    name: str,
+    value: float,
+    rest: Sequence[str],
+    starts: Sequence[Mapping[str, float]],
+    ordered: bool | Literal["driven"] | None,
+    sigma: float | None,
+) -> tuple[float, CalibrationResult]:
+    """Refit ``rest`` with ``name`` fixed at ``value``: (signed r, the best refit)."""
+    cal = min(
+        (
+            calibrate(
+                design,
+                m,
+                fit.effects,
+                rest,
+                fixed={name: value},
+                initial={n: s[n] for n in rest if n in s},
+                ordered=ordered,
+                sigma=sigma,
+            )
+            for s in starts
+        ),
+        key=lambda c: c.chi2,
+    )
+    s2 = fit.chi2 / fit.dof
+    r = math.sqrt(max(cal.chi2 - fit.chi2, 0.0) / s2)
+    return math.copysign(r, value - fit.estimate[name]), cal
+
+
+def _end(
+    design: Design,
+    m: Measurements,
+    fit: CalibrationResult,
+    name: str,
+    rest: Sequence[str],
+    u_hat: float,
+    sign: float,
+    step: float,
+    bound: float,
+    ordered: bool | Literal["driven"] | None,
+    sigma: float | None,
+) -> tuple[float, int]:
+    """One end of the 1-sigma interval: (value [SI], refits)."""
+    span = abs(_to_u(name, bound) - u_hat)
+    if span < 1e-12:
+        return bound, 0
+    start = {n: fit.estimate[n] for n in rest}
+    below, above = (0.0, 0.0), None  # (distance from u_hat, |r|) with |r| < 1 and > 1
+    h = min(step, span)
+    for fits in range(1, MAX_FITS + 1):
+        value = _from_u(name, u_hat + sign * h)
+        r, cal = _refit(design, m, fit, name, value, rest, [start], ordered, sigma)
+        r = abs(r)
+        if abs(r - 1) < TOLERANCE:
+            return value, fits
+        if r < 1:
+            below, start = (h, r), {n: cal.estimate[n] for n in rest}
+            if h >= span:
+                return bound, fits  # the bound comes before 1 sigma
+        else:
+            above = (h, r)
+        if above is None:  # extrapolate r linearly from the estimate
+            h = min(h / r if r > 0.1 else 4 * h, span)
+        else:  # secant across r = 1, bisection if it leaves the bracket
+            (h0, r0), (h1, r1) = below, above
+            h = h0 + (1 - r0) * (h1 - h0) / (r1 - r0)
+            if not h0 < h < h1:
+                h = 0.5 * (h0 + h1)
+    # Out of refits: the nearest point beyond 1 sigma (conservative), else the last below.
+    h = above[0] if above is not None else below[0]
+    return _from_u(name, u_hat + sign * h), MAX_FITS
+
+
+__all__ = ["Interval", "profile_intervals", "profile_sigma"]

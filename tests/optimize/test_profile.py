@@ -1,0 +1,56 @@
+"""Profile-likelihood intervals (optimize.profile) against the linear theory they reduce
+to, and at a parameter's bound."""
+
+from __future__ import annotations
+
+import pytest
+
+from design.designfile import default_design
+from optimize.calibrate import calibrate, default_free
+from optimize.profile import profile_intervals, profile_sigma
+from optimize.synth import synthesize_data
+
+DEMO = default_design()
+
+
+def test_profile_interval_is_the_gauss_newton_interval_where_the_model_is_locally_linear():
+    """For a model linear in its parameters over the error's range, the profile
+    likelihood's 1-sigma interval is estimate +- the Gauss-Newton standard error (Bates &
+    Watts 1988, Nonlinear Regression Analysis, ch. 6). Low-noise torsion data of the
+    demonstrator make the model locally linear: each half-width must be the standard
+    error to 3 %."""
+    effects = ("torsion",)
+    truth = {"wire_torsion_scale": 2.0, "catheter_torsion_scale": 3.0}
+    m = synthesize_data(DEMO, effects, noise_mm=0.05, seed=3, params_override=truth).measurements
+    fit = calibrate(DEMO, m, effects, default_free(effects), ordered=False)
+    intervals = profile_intervals(DEMO, m, fit, list(truth), ordered=False)
+    for name, iv in intervals.items():
+        est, se = fit.estimate[name], fit.standard_error[name]
+        assert iv.upper - est == pytest.approx(se, rel=0.03), name
+        assert est - iv.lower == pytest.approx(se, rel=0.03), name
+        # and the profile at an end is 1 sigma away, by construction of the search
+        assert profile_sigma(DEMO, m, fit, name, iv.upper, ordered=False) == pytest.approx(
+            1.0, abs=0.06
+        )
+
+
+def test_an_interval_end_the_bound_cuts_off_is_the_bound():
+    """No tip mass in the data: the estimate is a small positive mass less than one
+    standard error from zero, so the lower end of its interval is the bound, 0 g."""
+    effects = ("gravity",)
+    m = synthesize_data(
+        DEMO, effects, noise_mm=0.3, seed=1, params_override={"tip_mass": 0.0}
+    ).measurements
+    fit = calibrate(DEMO, m, effects, default_free(effects), ordered=False)
+    assert 0 < fit.estimate["tip_mass"] < fit.standard_error["tip_mass"]
+    iv = profile_intervals(DEMO, m, fit, ["tip_mass"], ordered=False)["tip_mass"]
+    assert iv.lower == 0.0
+    assert iv.upper > fit.estimate["tip_mass"]
+
+
+def test_profile_intervals_reject_a_parameter_that_is_not_free():
+    effects = ("gravity",)
+    m = synthesize_data(DEMO, effects, noise_mm=0.3, seed=1).measurements
+    fit = calibrate(DEMO, m, effects, default_free(effects), ordered=False)
+    with pytest.raises(ValueError, match="wire_torsion_scale.*not a free parameter"):
+        profile_intervals(DEMO, m, fit, ["wire_torsion_scale"])
