@@ -51,10 +51,6 @@ class Interval:
     upper: float
     fits: int
 
-    def half_width(self, estimate: float, toward: float) -> float:
-        """The interval's half-width on the side of ``toward``. [SI]"""
-        return self.upper - estimate if toward >= estimate else estimate - self.lower
-
 
 def _to_u(name: str, value: float) -> float:
     return (
