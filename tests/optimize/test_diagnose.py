@@ -140,6 +140,20 @@ def test_residual_structure_finds_a_pattern_and_not_noise():
     assert residual_structure(noise, feats)[0].p_value > 1e-3
 
 
+def fit_from_truth(effects: tuple[str, ...], seed: int):
+    """The data of ``draw(effects, seed)`` and a calibration started at the truth, each
+    configuration solved on its own: (design, truth, noise, measurements, fit)."""
+    from optimize.calibrate import calibrate, default_free
+
+    design, truth, noise = draw(effects, seed)
+    m = synthesize_data(design, effects, noise_mm=noise, seed=seed, params_override=truth)
+    free = default_free(effects)
+    fit = calibrate(
+        design, m.measurements, effects, free, initial={k: truth[k] for k in free}, ordered=False
+    )
+    return design, truth, noise, m.measurements, fit
+
+
 def test_a_fit_along_the_path_leaves_the_basin_where_the_robot_does_not_snap():
     """Regression (seed 2884561028 of the torsion + gravity test, once failed): the bench
     robot's transmissions are soft enough that its rings snap on the path. A least-squares
@@ -147,16 +161,10 @@ def test_a_fit_along_the_path_leaves_the_basin_where_the_robot_does_not_snap():
     are too stiff to snap (RMS 1.26 mm against 0.21 mm noise), and there the path no
     longer matters, so nothing local leads back. The diagnosis' full fits scan the misfit
     along the path (:func:`optimize.diagnose._scan`) and must end at the noise."""
-    from optimize.calibrate import calibrate, default_free
     from optimize.diagnose import _fit
 
     effects = ("torsion", "gravity")
-    design, truth, noise = draw(effects, 2884561028)
-    m = synthesize_data(
-        design, effects, noise_mm=noise, seed=2884561028, params_override=truth
-    ).measurements
-    free = default_free(effects)
-    stuck = calibrate(design, m, effects, free, initial={k: truth[k] for k in free}, ordered=False)
+    design, truth, noise, m, stuck = fit_from_truth(effects, 2884561028)
     assert stuck.rmse_mm > 3 * noise  # the trap is there
     fit = _fit(design, m, frozenset(effects), k=5, seed=0, cv=False, starts=[stuck], sigma=None)
     assert fit.calibration.rmse_mm < 1.5 * noise * np.sqrt(3)
@@ -172,15 +180,8 @@ def test_the_profile_likelihood_covers_torsion_where_the_linearised_error_does_n
     The fit (started at the truth, so not a stuck fit) lies over 4 linearised standard
     errors from the true catheter stiffness; the profile likelihood (the reported
     uncertainty, optimize.profile) puts both truths within 4 sigma."""
-    from optimize.calibrate import calibrate, default_free
-
     effects = ("torsion",)
-    design, truth, noise = draw(effects, 2313850729)
-    m = synthesize_data(
-        design, effects, noise_mm=noise, seed=2313850729, params_override=truth
-    ).measurements
-    free = default_free(effects)
-    fit = calibrate(design, m, effects, free, initial={k: truth[k] for k in free}, ordered=False)
+    design, truth, _, m, fit = fit_from_truth(effects, 2313850729)
     name = "catheter_torsion_scale"
     assert abs(fit.estimate[name] - truth[name]) > 4 * fit.standard_error[name]  # the trap
     for name in EFFECT_FREE["torsion"]:
