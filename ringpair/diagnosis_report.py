@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from design.atomic import write_text  # noqa: E402
-from optimize.diagnose import Diagnosis  # noqa: E402
+from optimize.diagnose import Diagnosis, parameter_values  # noqa: E402
 from optimize.measurements import Measurements  # noqa: E402
 
 
@@ -123,8 +123,9 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
         )
         for name, f in fits
     )
-    final = d.to_json()["final"]
-    intervals: dict[str, list[float]] = final["interval"]  # type: ignore[assignment]
+    estimate = parameter_values(d.final.calibration)
+    error = parameter_values(d.final.calibration, standard_error=True)
+    intervals = {k: v for c in d.causes for k, v in c.intervals.items()}
 
     def interval(key: str) -> str:
         return f"{intervals[key][0]:.4g} to {intervals[key][1]:.4g}" if key in intervals else ""
@@ -132,8 +133,8 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
     params = _row(
         ["parameter", "estimate", "standard error", "1-sigma profile interval"], "th"
     ) + "".join(
-        _row([html.escape(k), f"{v:.5g}", f"{final['uncertainty'][k]:.2g}", interval(k)])  # type: ignore[index]
-        for k, v in final["params"].items()  # type: ignore[attr-defined]
+        _row([html.escape(k), f"{v:.5g}", f"{error[k]:.2g}", interval(k)])
+        for k, v in estimate.items()
     )
     causes = (
         "".join(f"<li>{html.escape(c.evidence)}</li>" for c in d.causes)
