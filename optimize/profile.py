@@ -83,6 +83,7 @@ def profile_intervals(
 
     ordered, sigma : as the fit was made (see :func:`optimize.calibrate.calibrate`).
     """
+    _check(fit)
     free = fit.names
     out = {}
     for name in names:
@@ -120,9 +121,15 @@ def profile_sigma(
     ``fit``'s estimate (signed; |r| > 4 rejects it at the 4-sigma level). The others are
     refitted from ``fit``'s estimates and from each of ``starts`` (SI values by name), the
     best counts. [-]"""
+    _check(fit)
     rest = tuple(n for n in fit.names if n != name)
     r, _ = _refit(design, m, fit, name, value, rest, [fit.estimate, *starts], ordered, sigma)
     return r
+
+
+def _check(fit: CalibrationResult) -> None:
+    if fit.priors:
+        raise ValueError("profile intervals are for fits without priors (the data's misfit)")
 
 
 def _refit(

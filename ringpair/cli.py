@@ -589,6 +589,12 @@ def _measured_data(data: Path, design: Path | None):
 )
 @click.option("--priors", is_flag=True, help="Add Gaussian priors centred on the nominal design.")
 @click.option(
+    "--profile",
+    is_flag=True,
+    help="Also give each parameter's 1-sigma profile-likelihood interval (it fixed, the others "
+    "refitted): right where parameters trade off nonlinearly, where standard errors are not.",
+)
+@click.option(
     "--json",
     "json_out",
     type=click.Path(path_type=Path),
@@ -601,6 +607,7 @@ def calibrate(
     effects: str,
     free: str | None,
     priors: bool,
+    profile: bool,
     json_out: Path | None,
 ) -> None:
     """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
@@ -608,6 +615,10 @@ def calibrate(
     with their standard errors, and the RMS and largest tip error."""
     from optimize.calibrate import FREE_PARAMETERS
     from optimize.calibrate import calibrate as fit_parameters
+    from optimize.profile import profile_intervals
+
+    if profile and priors:
+        raise UserError("--profile is for fits without --priors (it profiles the data's misfit)")
 
     d, m = _measured_data(data, design_path)
     model = _model(effects)
@@ -627,17 +638,25 @@ def calibrate(
             res = fit_parameters(d, m, model.effects, names, priors=priors)
         except ValueError as exc:
             raise UserError(str(exc)) from None
+    intervals = {}
+    if profile:
+        with console.status("profile likelihood"):
+            intervals = profile_intervals(d, m, res, res.names)
     table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {len(m)} rows")
-    for col in ("parameter", "nominal", "estimate", "std. error", "unit"):
+    columns = ["parameter", "nominal", "estimate", "std. error"]
+    for col in columns + (["1-sigma profile interval"] if profile else []) + ["unit"]:
         table.add_column(col, justify="right")
     for row in res.table():
-        table.add_row(
+        cells = [
             str(row["name"]),
             f"{row['nominal']:.5g}",
             f"{row['estimate']:.5g}",
             f"{row['standard_error']:.2g}",
-            str(row["unit"]),
-        )
+        ]
+        if profile:
+            iv, factor = intervals[str(row["name"])], FREE_PARAMETERS[str(row["name"])].label[1]
+            cells.append(f"{iv.lower * factor:.4g} to {iv.upper * factor:.4g}")
+        table.add_row(*cells, str(row["unit"]))
     console.print(table)
     console.print(
         f"tip error: RMS {res.rmse_mm:.3f} mm, largest {res.max_abs_mm:.3f} mm; implied noise "
@@ -661,6 +680,11 @@ def calibrate(
             "estimate": res.estimate,
             "standard_error": {k: finite(v) for k, v in res.standard_error.items()},
             "nominal": res.nominal,
+            **(
+                {"profile_interval": {k: [v.lower, v.upper] for k, v in intervals.items()}}
+                if profile
+                else {}
+            ),
             "correlation": [[finite(c) for c in row] for row in np.round(res.correlation, 6)],
             "rmse_mm": res.rmse_mm,
             "max_abs_mm": res.max_abs_mm,

@@ -86,3 +86,25 @@ def test_calibrate_fits_a_synthetic_data_set(tmp_path):
     est, se = doc["estimate"], doc["standard_error"]
     assert abs(est["bending_rigidity_scale"] - 0.8) < 3 * se["bending_rigidity_scale"]
     assert doc["converged"] and "tip error: RMS" in result.output
+
+
+def test_calibrate_profile_gives_intervals_around_the_estimates(tmp_path):
+    out = tmp_path / "set"
+    assert run("synth", "--n", "24", "--effects", "gravity", "--out", str(out)).exit_code == 0
+    result = run(
+        "calibrate",
+        str(out),
+        "--effects",
+        "gravity",
+        "--profile",
+        "--json",
+        str(tmp_path / "f.json"),
+    )
+    assert result.exit_code == 0, result.output
+    assert "profile" in result.output  # the column (its header may wrap)
+    doc = json.loads((tmp_path / "f.json").read_text())
+    for name, (lower, upper) in doc["profile_interval"].items():
+        assert lower <= doc["estimate"][name] <= upper, name
+    assert set(doc["profile_interval"]) == set(doc["estimate"])
+    both = run("calibrate", str(out), "--profile", "--priors")
+    assert both.exit_code == 2 and "--profile is for fits without --priors" in both.output
