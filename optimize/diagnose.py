@@ -17,7 +17,9 @@ Method (the result format is spec/formats.md's diagnosis JSON):
    and the residual is not yet consistent with the stated noise (chi-square test, when the
    data give sigma).
 4. Name each accepted cause with its evidence (the residual structure it removes, the
-   fitted parameters, the cross-validated gain), and say whether structure remains.
+   cross-validated gain, its parameters as the final model estimates them with 1-sigma
+   profile-likelihood intervals, :mod:`optimize.profile`), and say whether structure
+   remains.
 
 Data with an acquisition order are fitted along the bench's path wherever that changes
 the states (a multistable robot), and each full fit of such data also scans the misfit
