@@ -34,7 +34,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
-from design.model import RingPairModel
+from design.model import RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
 from optimize.measurements import Measurements
@@ -48,7 +48,6 @@ from optimize.paper_grid import (
 from optimize.sensitivity import (
     SENSITIVE,
     Prediction,
-    model_with,
     position_errors,
     predict,
     prediction_sensitivities,
@@ -73,7 +72,6 @@ __all__ = [
     "cross_validate",
     "default_free",
     "grid_search_two_factors",
-    "model_with",
     "position_errors",
     "predict",
     "prediction_sensitivities",
@@ -415,7 +413,7 @@ def calibrate(
     tip_angles : also fit measured tip angles (sigma TIP_ANGLE_SIGMA) where present.
     """
     t0 = time.perf_counter()
-    model = model_with(frozenset(effects))
+    model = model_for(frozenset(effects))
     names = _check_free(default_free(model.effects) if free is None else free)
     base = model.parameters(design)
     for name, value in (fixed or {}).items():

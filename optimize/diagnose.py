@@ -41,7 +41,7 @@ from typing import Literal
 import numpy as np
 from scipy import stats
 
-from design.model import EFFECTS, RingPairModel
+from design.model import EFFECTS, RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
 from design.sections import tube_torsional_rigidity
@@ -52,7 +52,6 @@ from optimize.calibrate import (
     calibrate,
     cross_validate,
     default_free,
-    model_with,
     predict,
     row_sigma,
 )
@@ -310,7 +309,7 @@ def _fit(
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
     estimates), keep the best, and cross-validate it if ``cv``."""
     free = default_free(effects)
-    model = model_with(effects)
+    model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
     def path_matters(params: np.ndarray) -> bool:
@@ -488,7 +487,7 @@ def diagnose(
     baseline = current
 
     def structure(fit: Fit) -> tuple[Structure, ...]:
-        model = model_with(fit.effects)
+        model = model_for(fit.effects)
         path: Literal["driven"] | bool = "driven" if m.sequence is not None else False
         position = predict(model, fit.calibration.params, m, path).equilibria.position
         position = np.where(np.isfinite(position), position, m.position)

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from design.model import model_for
 from design.parameters import index
 from design.params import Design
 from optimize.measurements import Measurements
-from optimize.sensitivity import model_with, position_errors, predict
+from optimize.sensitivity import position_errors, predict
 
 MM = 1e-3
 
@@ -86,7 +87,7 @@ def grid_search_two_factors(
     if objective not in ("max", "rms"):
         raise ValueError(f"objective must be 'max' or 'rms'; got {objective!r}")
     t0 = time.perf_counter()
-    model = model_with(frozenset(effects))
+    model = model_for(frozenset(effects))
     base = model.parameters(design)
     ks = stiffness_center * (PAPER_STIFFNESS_GRID if stiffness_grid is None else stiffness_grid)
     kb = field_center * (PAPER_FIELD_GRID if field_grid is None else field_grid)

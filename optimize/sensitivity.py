@@ -23,7 +23,7 @@ import numpy as np
 from design.compiled import compile_function, evaluate_columns
 from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.friction import play, play_step
-from design.model import RingPairModel, model_for
+from design.model import RingPairModel
 from design.parameters import NAMES, index
 from optimize.measurements import Measurements
 
@@ -37,11 +37,6 @@ PATH_INDEPENDENT = frozenset({"hysteresis", "near_field", "gravity"})
 transmissions rigid in torsion, one equilibrium per pair of angles): along a path only the
 friction play depends on the order. With ``torsion`` (multistable rings) or
 ``large_deflection`` the path itself is followed."""
-
-
-def model_with(effects: frozenset[str]) -> RingPairModel:
-    """One model object per set of effects, so its functions are built once per process."""
-    return model_for(frozenset(effects))
 
 
 SENSITIVE = (
