@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 CFLAGS = ("-O2", "-shared", "-fPIC")
-_loaded: dict[str, ca.Function] = {}
+_loaded: dict[str, list[ca.Function]] = {}
 
 
 def cache_dir() -> Path:
@@ -38,50 +38,63 @@ def _compiler() -> str | None:
 def compile_function(function: ca.Function) -> ca.Function:
     """Native-code twin of ``function`` (same inputs and outputs), or ``function`` itself
     when no C compiler is available."""
+    return compile_functions([function])[0]
+
+
+def compile_functions(functions: list[ca.Function]) -> list[ca.Function]:
+    """Native-code twins of ``functions``, generated into one C file and one shared
+    library, so that what they share (a model's rod and field code) is compiled once; or
+    the functions themselves when no C compiler is available."""
     cc = _compiler()
     if cc is None:
         warnings.warn(
             "no C compiler found: ringpair evaluates its model in CasADi's "
             "virtual machine, about 15x slower",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
-        return function
-    name = function.name()
+        return list(functions)
+    name = "_".join(f.name() for f in functions)[:60]
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-    gen.add(function)
+    for function in functions:
+        gen.add(function)
     source = gen.dump()
     digest = hashlib.sha256(
         (source + " ".join(CFLAGS) + ca.CasadiMeta.version()).encode()
     ).hexdigest()
     key = f"{name}_{digest[:20]}"
-    if key in _loaded:
-        return _loaded[key]
-    target = cache_dir() / f"{key}.so"
-    if not target.exists():
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-            src = Path(tmp) / f"{name}.c"
-            src.write_text(source)
-            lib = Path(tmp) / f"{key}.so"
-            result = subprocess.run(
-                [cc, *CFLAGS, str(src), "-o", str(lib), "-lm"],
-                capture_output=True,
-                text=True,
-                check=False,
+    if key not in _loaded:
+        target = cache_dir() / f"{key}.so"
+        if not target.exists() and not _build(cc, name, key, source, target):
+            return list(functions)
+        _loaded[key] = [ca.external(f.name(), str(target)) for f in functions]
+    return _loaded[key]
+
+
+def _build(cc: str, name: str, key: str, source: str, target: Path) -> bool:
+    """Compile ``source`` into the shared library ``target``; False (with a warning) if
+    the compiler fails."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        src = Path(tmp) / f"{name}.c"
+        src.write_text(source)
+        lib = Path(tmp) / f"{key}.so"
+        result = subprocess.run(
+            [cc, *CFLAGS, str(src), "-o", str(lib), "-lm"],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if result.returncode != 0:
+            warnings.warn(
+                f"compiling {name} failed ({result.stderr.strip()[:200]}); "
+                "using CasADi's virtual machine",
+                RuntimeWarning,
+                stacklevel=4,
             )
-            if result.returncode != 0:
-                warnings.warn(
-                    f"compiling {name} failed ({result.stderr.strip()[:200]}); "
-                    "using CasADi's virtual machine",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
-                return function
-            os.replace(lib, target)  # atomic: concurrent processes never see half a library
-    compiled = ca.external(name, str(target))
-    _loaded[key] = compiled
-    return compiled
+            return False
+        os.replace(lib, target)  # atomic: concurrent processes never see half a library
+    return True
 
 
 def evaluate_columns(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]:

@@ -16,9 +16,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import tomli_w
 
 from design.atomic import write_text
+from design.geometry import cylinder_distance
 from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 
 MM = 1e-3
@@ -272,26 +274,22 @@ def _check_clearance(design: Design) -> None:
     ext = design.external_magnet
     tip = design.tip
     reach = design.robot.free_length + tip.spacing + tip.magnet_length / 2
-    axis = ext.magnetization
-    half, radius = ext.length / 2, ext.diameter / 2
-    n = 4001
-    for i in range(n):
-        x = reach * i / (n - 1)
-        # The tip rings are the thickest part; the body is the catheter.
-        near_tip = x >= design.robot.free_length - tip.magnet_length / 2
-        r_body = (
-            tip.magnet_outer_diameter if near_tip else design.robot.catheter.outer_diameter
-        ) / 2
-        d = (x - ext.center[0], -ext.center[1], -ext.center[2])
-        a = sum(di * ai for di, ai in zip(d, axis, strict=True))
-        radial = math.sqrt(max(sum(di * di for di in d) - a * a, 0.0))
-        gap = math.hypot(max(abs(a) - half, 0.0), max(radial - radius, 0.0))
-        if gap < r_body:
-            raise DesignError(
-                "external_magnet.center_mm places the magnet on the straight robot: the "
-                f"cylinder must clear the robot (base to distal ring, radius {r_body / MM:g} mm); "
-                f"got an overlap at x = {x / MM:.2f} mm in the base frame"
-            )
+    x = np.linspace(0.0, reach, 4001)
+    # The tip rings are the thickest part; the body is the catheter.
+    near_tip = x >= design.robot.free_length - tip.magnet_length / 2
+    r_body = np.where(
+        near_tip, tip.magnet_outer_diameter / 2, design.robot.catheter.outer_diameter / 2
+    )
+    offset = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)]) - np.asarray(ext.center)
+    gap = cylinder_distance(offset, ext.magnetization, ext.diameter / 2, ext.length / 2)
+    overlap = np.flatnonzero(gap < r_body)
+    if overlap.size:
+        raise DesignError(
+            "external_magnet.center_mm places the magnet on the straight robot: the "
+            f"cylinder must clear the robot (base to distal ring, radius "
+            f"{r_body[overlap[0]] / MM:g} mm); got an overlap at x = {x[overlap[0]] / MM:.2f} mm "
+            "in the base frame"
+        )
 
 
 def load_design(path: str | os.PathLike[str]) -> Design:

@@ -1,14 +1,40 @@
-"""Equilibrium of the ring-pair robot: Newton's method, in batch or along a command path.
+"""Equilibrium of the ring-pair robot: *the state* it reaches, in batch or along a path.
 
-The magnetic wrench depends on the tip pose, so the steady state solves r(x) = 0
-(:mod:`design.model`). For N independent configurations a fixed number of Newton steps
-from the straight robot is compiled into one function and mapped over the batch;
-configurations whose residual is not below tolerance afterwards are re-solved by load
-continuation (all loads ramped from zero), and any still unconverged are flagged and
-returned as NaN. Along an ordered command path (:func:`solve_sequence`) each state starts
-from the previous one, so the robot follows its branch of equilibria as a real one does:
-friction play (``hysteresis``) acts on the commands, and a jump to another branch
-(snap-through of a lagging ring) is detected and flagged.
+The magnetic wrench depends on the tip pose, so a steady state solves r(x) = 0
+(:mod:`design.model`). Near a strong magnet or with a soft rod r = 0 has several
+solutions, stable and unstable, and which one a real robot sits in depends on how it got
+there. The state has one definition, used by every caller (simulation, workspace, NLP
+samples, calibration and each cross-validation fold, Monte Carlo):
+
+- **A configuration on its own** (:func:`solve_equilibria`): the stable equilibrium
+  connected to the unloaded robot by a quasi-static load ramp. The ring angles are held
+  and every load (the field, gravity, the rings' mutual torque) is scaled by lambda from 0
+  (the straight, unloaded robot) to 1; the branch of equilibria is followed by
+  natural-parameter continuation: a secant predictor, Newton corrections, and a step in
+  lambda accepted only where Newton contracts (each correction at most CONTRACTION of the
+  one before; Deuflhard, *Newton Methods for Nonlinear Problems*, 2004, sec. 5.1) and the
+  state stays stable. The step grows where Newton converges fast and shrinks where it does
+  not. Where the branch ends in a fold (the step falls below MIN_LOAD_STEP: a pull-in
+  towards the magnet, the rings' snap), the robot falls: it is relaxed down its potential
+  along -K^-1 r (K its own elastic stiffness, :class:`design.model.RingPairModel`) into
+  the stable state it reaches, which is flagged ``snapped``, and the ramp goes on from
+  there.
+- **A driven path** (:func:`solve_sequence`): the first command as above, then each
+  command from the previous state in sub-steps of at most SUBSTEP, so the robot stays on
+  its branch as a real one does; friction play (``hysteresis``) acts on the commands, and
+  where the branch ends the robot falls as above (``snapped``).
+
+Never an unstable state as an answer: a returned state is converged (infinity norm of the
+scaled residual below TOLERANCE), stable by the model's check (linear rod: the Sylvester
+minors of the stiffness form; large-deflection rod: every eigenvalue of M = K^-1 dr/dx
+with a positive real part) and clear of the external magnet (contact is not modelled).
+Anything else is NaN, with the reason in ``failure``. On request (``multistable=True``)
+other stable states at the same command are looked for, from the straight robot at full
+load, from the mirror image of the state and, with torsion, from the rings' lags mirrored;
+``multistable`` flags where one is found (a search, so a lower bound on multistability).
+
+Batches run through compiled CasADi functions mapped over columns; the per-column ramp
+logic is vectorised in numpy. SI units are used for all inputs and outputs.
 """
 
 from __future__ import annotations
@@ -16,25 +42,66 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from design.compiled import BufferEvaluator, compile_function, evaluate_columns
+from design.compiled import BufferEvaluator, compile_functions, evaluate_columns
 from design.friction import play
 from design.model import RingPairModel
 from design.parameters import index
 from design.params import Design
 
-NEWTON_STEPS = 6
 TOLERANCE = 1e-10
 """Convergence: infinity norm of the scaled residual below this. [m or rad]"""
-CHUNK = 65536
-GRAIN = 1024
-THREADS = 2
-CONTINUATION_STEPS = (4, 16, 64)
+RAMP_TOLERANCE = 1e-7
+"""Convergence at the intermediate load factors of a ramp (only the branch is followed
+there). [m or rad]"""
+MAX_LOAD_STEP = 1.0
+"""Largest step of the load factor lambda; the ramp's step adapts below it. [-]"""
+MIN_LOAD_STEP = 2.0**-12
+"""Below this step the branch is taken to end (a fold). [-]"""
+CONTRACTION = 0.25
+"""A ramp step is accepted only if each Newton correction is at most this fraction of the
+one before (Deuflhard's contraction test: the corrector stays in the predictor's basin)."""
+MAX_CORRECTIONS = 8
+"""Newton corrections per ramp step before the step is refused."""
+TARGET_CONTRACTION = CONTRACTION / 2
+"""The step control aims at this first contraction: the secant predictor's error grows
+with the square of the step, and so does Newton's contraction, so the next step is the
+last times sqrt(TARGET_CONTRACTION / contraction) (Deuflhard 2004, sec. 5.1.3), at most
+GROWTH times larger and at least SHRINK times smaller."""
+GROWTH = 4.0
+SHRINK = 8.0
+FIRST_DISPLACEMENT = 0.3
+"""The first step of a ramp is at most so large that the tangent from rest predicts a
+change of state of this much (dimensionless: unknowns over their scale, i.e. 0.3 of the
+free length or 0.3 rad). [-]"""
+SETTLE_OVERSHOOT = 2.0**-8
+"""Past a fold the robot falls at this much more load (so that the fall has a direction).
+[-]"""
+RESTART_STEP = 2.0**-4
+"""First ramp step after a fall. [-]"""
+MAX_FALLS = 8
+"""Falls (snap-throughs) per configuration before the ramp gives up."""
+KICK = 1e-3
+"""How far a falling robot is first moved along its softest mode (dimensionless: unknowns
+over their scale). [-]"""
+MODE_FLOOR = 1e-4
+"""Smallest stiffness of a mode, relative to the elastic one, in the steps of a fall. [-]"""
+TRUST = 0.05
+"""Longest step of a fall (dimensionless). [-]"""
+FALL_ITERATIONS = 400
+"""Steps of one fall before it is given up."""
+POLISH_ATTEMPTS = 3
+"""Newton polishes of one fall that may fail to reach a stable state before it is given
+up."""
+POLISH_BELOW = 1e-3
+"""A falling state is polished by Newton once it is stable in every mode and its step is
+below this (dimensionless). [-]"""
+DISTINCT = 1e-6
+"""Two states differ when their unknowns differ by more than this, dimensionless. [-]"""
 SUBSTEP = np.deg2rad(1.0)
 """Largest command increment per solve along a path. [rad]"""
 SNAP_LAG_JUMP = 0.1
@@ -45,20 +112,23 @@ SMOOTH_LAG_CHANGE = 0.02
 """Where the lags change by less than this per solve, the path is plainly smooth and is
 followed in strides of up to MAX_STRIDE sub-steps; any larger change, instability or
 failure sends it back to single sub-steps, where snaps are judged. [rad]"""
-SETTLE_ANGLE = 0.05
-"""Perturbation of the tip angles when looking for the state an unstable one falls into. [rad]"""
-SETTLE_RELAXATION = 60
-"""Downhill relaxation steps before Newton when settling from an unstable state."""
-ENTRY_STEPS = 16
-"""Load steps in which a driven robot is brought into its loads at the first command."""
-INLINE_LIMIT = 4000
-"""Residuals cheaper than this many operations are inlined into the unrolled Newton steps;
-costlier ones are called (smaller C code, faster compilation)."""
+CHUNK = 65536
+GRAIN = 1024
+THREADS = 2
+
+FAILURES = {
+    "fold": "the load ramp ended in a fold and the robot found no stable state to fall into",
+    "falls": f"the robot snapped more than {MAX_FALLS} times on the load ramp",
+    "unstable": "no stable state: the robot relaxed into none from its unstable equilibrium",
+    "diverged": "the solver diverged (the tip pulled into the external magnet?)",
+    "stalled": f"Newton's residual stalls above the tolerance ({TOLERANCE:g} m or rad)",
+    "contact": "the rings touch the external magnet (contact is not modelled)",
+}
 
 
 @dataclass(frozen=True)
 class Equilibria:
-    """Steady states of N configurations. Unconverged rows hold NaN in every pose array.
+    """Steady states of N configurations. Rows without a state hold NaN in every pose array.
 
     command : shape (N, 2), ring angles commanded at the base (theta1 distal, theta2). [rad]
     tip_angles : shape (N, 2), ring angles at the tip (differ with torsion/hysteresis). [rad]
@@ -66,10 +136,14 @@ class Equilibria:
     tangent : shape (N, 3), unit tip tangent, base frame. [-]
     frame : shape (N, 3, 3), tip frame, columns (tangent, y_tip, z_tip), base frame. [-]
     unknowns : shape (N, n), the model's unknowns x at equilibrium. [SI]
-    converged : shape (N,), residual below TOLERANCE.
-    stable : shape (N,), converged and the equilibrium is stable.
+    converged : shape (N,), a state was found (residual below TOLERANCE).
+    stable : shape (N,), converged and stable (every returned state is).
     residual : shape (N,), infinity norm of the final residual. [m or rad]
-    snapped : shape (N,), along a path: the robot jumped to another branch on its way here.
+    snapped : shape (N,), the robot jumped to another branch on its way here (a fold of the
+        load ramp, or along a path).
+    multistable : shape (N,), another stable state exists at the same command (only looked
+        for on request; False otherwise).
+    failure : shape (N,), why a row has no state ('' where it has one).
     """
 
     command: np.ndarray
@@ -82,158 +156,626 @@ class Equilibria:
     stable: np.ndarray
     residual: np.ndarray
     snapped: np.ndarray
+    multistable: np.ndarray
+    failure: np.ndarray
 
     def __len__(self) -> int:
         return len(self.converged)
 
 
-@lru_cache(maxsize=16)
-def newton_function(model: RingPairModel) -> ca.Function:
-    """Compiled single-configuration solver: (x0, command, params) ->
-    (x, |r|_inf, stability indicator, position, frame (9, column-major), tip angles)."""
-    inline = model.residual.n_instructions() < INLINE_LIMIT
-    sym: Any = ca.SX.sym if inline else ca.MX.sym
-    x0: Any = sym("x0", model.n_unknowns)
-    command: Any = sym("command", 2)
-    prm: Any = sym("params", model.residual.size1_in(2))
-    x = x0
-    for _ in range(NEWTON_STEPS):
-        r, jac = model.residual(x, command, prm)
-        x = x - ca.solve(jac, r) if inline else x - ca.solve(jac, r, "qr")
-    r, _ = model.residual(x, command, prm)
-    indicator = model.stability(x, command, prm)
-    position, frame, angles = model.pose(x, command, prm)
-    fn = ca.Function(
-        "newton",
-        [x0, command, prm],
-        [x, ca.norm_inf(r), indicator, position, ca.reshape(frame, 9, 1), angles],
-    )
-    return compile_function(fn)
+# ----------------------------------------------------------------------- compiled kernels
 
 
-@lru_cache(maxsize=128)
-def _mapped(model: RingPairModel, size: int) -> ca.Function:
-    return newton_function(model).map(size, "thread", THREADS)
+class _Kernels:
+    """The compiled functions of one model that the solver calls, the loads scaled by the
+    load factor lambda: ``newton`` (x, command, lambda, params) -> (r, Newton step,
+    dx/dlambda, monitor), ``relaxation`` and ``modes`` as
+    :class:`design.model.RingPairModel`'s;
+    ``check`` (x, command, params) -> (r, exact monitor, position, frame (9,
+    column-major), tip angles, clearance to the external magnet) at full load."""
+
+    def __init__(self, model: RingPairModel) -> None:
+        self.model = model
+        x = ca.SX.sym("x", model.n_unknowns)
+        command = ca.SX.sym("command", 2)
+        lam = ca.SX.sym("load_factor")
+        prm = ca.SX.sym("params", model.residual.size1_in(2))
+        load = index("load_scale")
+        scaled = ca.vertcat(prm[:load], prm[load] * lam, prm[load + 1 :])
+        r_lam, step, load_tangent, monitor_lam = model.newton.call([x, command, scaled])
+        newton = ca.Function(
+            "newton",
+            [x, command, lam, prm],
+            [r_lam, step, load_tangent * prm[load], monitor_lam],  # dx / dlambda
+        )
+        relaxation, modes = (
+            ca.Function(
+                name, [x, command, lam, prm], getattr(model, name).call([x, command, scaled])
+            )
+            for name in ("relaxation", "modes")
+        )
+        r, monitor, position, frame, angles, clearance = model.check.call([x, command, prm])
+        check = ca.Function(
+            "check",
+            [x, command, prm],
+            [r, monitor, position, ca.reshape(frame, 9, 1), angles, clearance],
+        )
+        compiled = compile_functions([newton, relaxation, modes, check])
+        self.newton, self.relaxation, self.modes, self.check = compiled
+        self._maps: dict[tuple[str, int], ca.Function] = {}
+        self._lock = threading.Lock()
+
+    def _mapped(self, which: str, size: int) -> ca.Function:
+        key = (which, size)
+        with self._lock:
+            if key not in self._maps:
+                self._maps[key] = getattr(self, which).map(size, "thread", THREADS)
+            return self._maps[key]
+
+    def run(self, which: str, args: list[np.ndarray], params: np.ndarray) -> list[np.ndarray]:
+        """Evaluate ``which`` on the columns of ``args`` (each (rows, N)) with ``params``
+        shared, shape (k,), or per column, (k, N); in chunks of CHUNK columns, the last one
+        padded to a power of two below GRAIN and to a multiple of GRAIN above (few distinct
+        map sizes, at most half the work wasted). Returns each output as (rows, N)."""
+        n = args[0].shape[1]
+        if params.ndim == 1:  # (a shared input of a threaded map is far slower in CasADi)
+            params = np.broadcast_to(params[:, None], (params.size, n))
+        outs: list[list[np.ndarray]] = []
+        for start in range(0, n, CHUNK):
+            stop = min(start + CHUNK, n)
+            count = stop - start
+            size = min(CHUNK, -(-count // GRAIN) * GRAIN, 1 << (count - 1).bit_length())
+            chunk = [a[:, start:stop] for a in (*args, params)]
+            if size > count:
+                chunk = [np.pad(c, ((0, 0), (0, size - count)), mode="edge") for c in chunk]
+            results = evaluate_columns(self._mapped(which, size), chunk)
+            outs = outs or [[] for _ in results]
+            for acc, out in zip(outs, results, strict=True):
+                acc.append(out[:, :count])
+        return [np.concatenate(acc, axis=1) for acc in outs]
 
 
-def _chunked(function: Any, args: list[np.ndarray], n: int) -> list[np.ndarray]:
-    """Evaluate ``function(size)`` (a mapped CasADi function of ``size`` columns) on the
-    columns of ``args`` in chunks of CHUNK; the last chunk is padded to a power of two
-    below GRAIN columns and to a multiple of GRAIN above (few distinct map sizes, at most
-    half the work wasted: a path's single configurations must not pay for GRAIN).
-    Returns (rows, n) outputs."""
-    outs: list[list[np.ndarray]] = []
-    for start in range(0, n, CHUNK):
-        stop = min(start + CHUNK, n)
-        count = stop - start
-        size = min(CHUNK, -(-count // GRAIN) * GRAIN, 1 << (count - 1).bit_length())
-        pad = size - (stop - start)
-        chunk = [a[:, start:stop] for a in args]
-        if pad:
-            chunk = [np.pad(a, ((0, 0), (0, pad)), mode="edge") for a in chunk]
-        results = evaluate_columns(function(size), chunk)
-        outs = outs or [[] for _ in results]
-        for acc, out in zip(outs, results, strict=True):
-            acc.append(out[:, : stop - start])
-    return [np.concatenate(acc, axis=1) for acc in outs]
+@lru_cache(maxsize=32)
+def kernels(model: RingPairModel) -> _Kernels:
+    """The compiled solver functions of ``model`` (built and compiled once per process;
+    the shared library is cached on disk by :mod:`design.compiled`)."""
+    return _Kernels(model)
 
 
-def _columns(params: np.ndarray, n: int) -> np.ndarray:
-    """params (k,) shared by all columns, or (k, n) one per column -> (k, n)."""
-    return np.broadcast_to(params[:, None], (params.size, n)) if params.ndim == 1 else params
+# ------------------------------------------------------------------------------ stability
 
 
-def _run(
-    model: RingPairModel, x0: np.ndarray, command: np.ndarray, params: np.ndarray
-) -> tuple[np.ndarray, ...]:
-    """Run the compiled solver on columns (x0, command, params).
-
-    params : shape (n,) shared by all columns, or (n, N) one per column.
-    """
-    n = command.shape[1]
-    args = [x0, command, _columns(params, n)]
-    return tuple(_chunked(lambda size: _mapped(model, size), args, n))
+def _matrices(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
+    """The monitor matrices M (column-major rows of ``monitor``) as (N, n, n), transposed
+    (which changes neither determinant nor eigenvalues)."""
+    n = model.n_unknowns
+    return monitor.T.reshape(-1, n, n)
 
 
-@lru_cache(maxsize=128)
-def _mapped_initial(model: RingPairModel, size: int) -> ca.Function:
-    return model.initial.map(size)
+def _fold_free(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
+    """Whether each column's monitor is on the stable side of every fold seen from rest:
+    all Sylvester minors positive (linear rod), det M > 0 (large-deflection rod)."""
+    if model.linear_rod:
+        return np.all(monitor > 0, axis=0)
+    with np.errstate(invalid="ignore"):
+        return np.linalg.det(_matrices(model, monitor)) > 0
 
 
-def _initial(model: RingPairModel, command: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """Newton's start: the straight robot; for the large-deflection rod the prediction from
-    the linear model's equilibrium, and NaN where that did not converge (so that the
-    column goes to load continuation rather than start from a coiled rod)."""
-    n = command.shape[1]
-    x0 = _chunked(lambda size: _mapped_initial(model, size), [command, _columns(params, n)], n)[0]
-    if model.predictor is None:
-        return x0
-    x_lin, res = _solve_columns(model.linear(), params, command)[:2]
-    good = res[0] < TOLERANCE
-    x0[:] = np.nan
-    if good.any():
-        prm = params if params.ndim == 1 else params[:, good]
-        predict = model.predictor.map(int(good.sum()))
-        x0[:, good] = np.asarray(predict(x_lin[:, good], command[:, good], prm))
-    return x0
+def _stable(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
+    """Exact stability of each column from the ``check`` monitor: all Sylvester minors
+    positive (linear rod) or all eigenvalues of M with positive real parts (large
+    deflection; eigenvalues of a compliance-weighted Hessian, real for these conservative
+    loads)."""
+    if model.linear_rod:
+        return np.all(monitor > 0, axis=0)
+    m = _matrices(model, monitor)
+    ok = np.isfinite(m).all(axis=(1, 2))
+    out = np.zeros(len(m), bool)
+    if ok.any():
+        out[ok] = (np.linalg.eigvals(m[ok]).real > 0).all(axis=1)
+    return out
 
 
-def _solve_columns(
-    model: RingPairModel, params: np.ndarray, command: np.ndarray
-) -> list[np.ndarray]:
-    """Newton from the straight robot, then load continuation for what did not converge.
+def _columns(params: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    return params if params.ndim == 1 else params[:, idx]
 
-    params : shape (n,) shared by all columns, or (n, N) one per column. [SI]
-    """
-    outs = list(_run(model, _initial(model, command, params), command, params))
-    bad = ~(outs[1][0] < TOLERANCE)
-    scale = index("load_scale")
-    for steps in CONTINUATION_STEPS:
-        idx = np.flatnonzero(bad)
-        if idx.size == 0:
+
+def _scale(model: RingPairModel, params: np.ndarray, n: int) -> np.ndarray:
+    """Scale of the unknowns per column, (n_unknowns, n)."""
+    scale = model.unknown_scale(params)
+    return np.broadcast_to(scale[:, None], (model.n_unknowns, n)) if scale.ndim == 1 else scale
+
+
+def _norm(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Dimensionless infinity norm of each column (NaN stays NaN)."""
+    return np.max(np.abs(values) / scale, axis=0)
+
+
+# --------------------------------------------------------------------- Newton and falls
+#
+# The helpers below work on the columns they are given: params (k,) shared or (k, m), one
+# per column; command (2, m); states x (n, m); load factors lam (m,).
+
+
+def _step_tolerance(model: RingPairModel, lam: np.ndarray) -> np.ndarray:
+    """A Newton step shorter than this (infinity norm, m or rad) is taken as the last: at
+    full load the state after it is exact to rounding (quadratic convergence with the exact
+    matrix of the linear rod; linear at the rate of the coarse matrix's error, about 1e-5,
+    otherwise), so that states depend smoothly on the parameters (finite differences,
+    fits); below full load, where only the branch is followed, 1e-6 m or rad."""
+    return np.where(lam >= 1.0, 1e-9, 1e-6)
+
+
+class _Checks:
+    """The ``check`` outputs (r, monitor, position, frame, tip angles, clearance) of states
+    at full load, kept per column of a solve (NaN where not checked)."""
+
+    def __init__(self, n: int) -> None:
+        self.outs: list[np.ndarray] | None = None
+        self.done = np.zeros(n, bool)
+
+    def put(self, idx: np.ndarray, outs: list[np.ndarray]) -> None:
+        if self.outs is None:
+            self.outs = [np.full((o.shape[0], self.done.size), np.nan) for o in outs]
+        for acc, o in zip(self.outs, outs, strict=True):
+            acc[:, idx] = o
+        self.done[idx] = True
+
+
+def _check(
+    model: RingPairModel, params: np.ndarray, command: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The exact check of states at full load: (converged, stable, check outputs)."""
+    outs = kernels(model).run("check", [x, command], params)
+    converged = np.max(np.abs(outs[0]), axis=0) < TOLERANCE
+    return converged, converged & _stable(model, outs[1]), outs
+
+
+def _judge(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    lam: np.ndarray,
+    monitor: np.ndarray,
+    checks: _Checks,
+    where: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Judge candidate states x (n, m) at load factors lam, given the solver's monitor at
+    (or within a last Newton step of) each: (converged, acceptable). At full load the
+    exact check decides (its outputs are put in ``checks`` at columns ``where``); below it
+    a candidate is converged by construction and the monitor must show no fold crossed."""
+    converged = np.ones(lam.size, bool)
+    ok = np.zeros(lam.size, bool)
+    full = lam >= 1.0
+    if full.any():
+        converged[full], ok[full], outs = _check(
+            model, _columns(params, full), command[:, full], x[:, full]
+        )
+        checks.put(where[full], outs)
+    ok[~full] = _fold_free(model, monitor[:, ~full])
+    return converged, ok
+
+
+def _newton(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    lam: np.ndarray,
+    checks: _Checks,
+    where: np.ndarray,
+    iterations: int = 2 * MAX_CORRECTIONS,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Newton from x at load factors lam (no contraction required): (states, converged,
+    acceptable as :func:`_judge` judges; checks of full-load states go to ``checks`` at
+    columns ``where``)."""
+    kern = kernels(model)
+    xs = x.copy()
+    ok = np.zeros(lam.size, bool)
+    done = np.zeros(lam.size, bool)
+    running = np.isfinite(xs).all(axis=0)
+    for _ in range(iterations):
+        a = np.flatnonzero(running)
+        if a.size == 0:
             break
-        sub = command[:, idx]
-        full = params[:, idx] if params.ndim == 2 else np.repeat(params[:, None], idx.size, 1)
-        prm = full.copy()
-        xc = None
-        for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            prm[scale] = lam * full[scale]
-            if xc is None:
-                xc = _initial(model, sub, prm)
-            out = _run(model, xc, sub, prm)
-            xc = np.where(np.isfinite(out[0]), out[0], xc)
-        for arr, new in zip(outs, out, strict=True):
-            arr[:, idx] = new
-        bad = ~(outs[1][0] < TOLERANCE)
-    return outs
+        r, step, _, monitor = kern.run(
+            "newton", [xs[:, a], command[:, a], lam[None, a]], _columns(params, a)
+        )
+        rn, sn = np.max(np.abs(r), axis=0), np.max(np.abs(step), axis=0)
+        lost = ~np.isfinite(sn)
+        running[a[lost]] = False
+        candidate = ~lost & ((rn < TOLERANCE) | (sn < _step_tolerance(model, lam[a])))
+        xs[:, a[~lost]] -= step[:, ~lost]  # (a converged state takes its last step too)
+        c = a[candidate]
+        if c.size:
+            converged, good = _judge(
+                model,
+                _columns(params, c),
+                command[:, c],
+                xs[:, c],
+                lam[c],
+                monitor[:, candidate],
+                checks,
+                where[c],
+            )
+            ok[c], done[c] = good, converged
+            running[c[converged]] = False
+    return xs, done, ok
 
 
-def _stable(out: list[np.ndarray]) -> bool:
-    """Converged and stable, for one configuration's solver outputs."""
-    return bool(out[1][0] < TOLERANCE and out[2].min() > 0)
+def _fall(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    lam: np.ndarray,
+    checks: _Checks,
+    where: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The stable states the robot falls into from x at load factors lam (a fold, or an
+    unstable equilibrium).
+
+    The robot goes down its potential. In the modes of M = K^-1 dr/dx (eigenvectors v,
+    eigenvalues mu: the stiffness of each mode relative to the elastic one) the downhill
+    direction -K^-1 r has components -a; each mode moves by -a / |mu| (with |mu| at least
+    MODE_FLOOR): Newton's step in the stable modes, and in an unstable mode the same
+    distance downhill instead of up to the saddle ("saddle-free Newton": Dauphin et al.,
+    NeurIPS 2014), the whole step at most TRUST long. It starts kicked by KICK both ways
+    along the softest mode, so that a symmetric bifurcation is left too, and is polished by
+    Newton once every mode is stable and the step is below POLISH_BELOW (a polish that
+    lands elsewhere than on a stable state sends the column on). Of the two ways the stable
+    state nearer x is taken (the first on a tie). Returns (states, found)."""
+    kern = kernels(model)
+    n, m = x.shape
+    both = np.concatenate([np.arange(m), np.arange(m)])
+    p2, c2, lam2 = _columns(params, both), command[:, both], lam[both]
+    scale = _scale(model, p2, 2 * m)
+    xs = np.concatenate([x, x], axis=1)
+    sign = np.concatenate([np.ones(m), -np.ones(m)])
+    found = np.zeros(2 * m, bool)
+    alive = np.isfinite(xs).all(axis=0)
+    kicked = np.zeros(2 * m, bool)
+    polishes = np.zeros(2 * m, int)
+    scratch = _Checks(2 * m)
+    for _ in range(FALL_ITERATIONS):
+        a = np.flatnonzero(alive & ~found)
+        if a.size == 0:
+            break
+        direction, modes = kern.run("modes", [xs[:, a], c2[:, a], lam2[None, a]], _columns(p2, a))
+        matrices = modes.T.reshape(-1, n, n).transpose(0, 2, 1)
+        good = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(direction).all(axis=0)
+        alive[a[~good]] = False
+        a, direction, matrices = a[good], direction[:, good], matrices[good]
+        if a.size == 0:
+            continue
+        values, vectors = np.linalg.eig(matrices)
+        fresh = ~kicked[a]
+        if fresh.any():  # leave along the softest mode, both ways
+            soft = vectors[np.flatnonzero(fresh), :, np.argmin(values.real[fresh], axis=1)].real
+            relative = soft.T / scale[:, a[fresh]]
+            # (a mode's sign is arbitrary: its largest component counts positive)
+            lead = relative[np.argmax(np.abs(relative), axis=0), np.arange(relative.shape[1])]
+            kick = KICK * np.sign(lead) / np.where(lead != 0, np.abs(lead), 1.0)
+            xs[:, a[fresh]] += sign[a[fresh]] * kick * soft.T
+            kicked[a[fresh]] = True
+        components = np.linalg.solve(vectors, direction.T[:, :, None].astype(complex))[:, :, 0]
+        magnitude = np.maximum(np.abs(values.real), MODE_FLOOR)
+        step = np.einsum("kij,kj->ki", vectors, components / magnitude).real.T
+        size = _norm(step, scale[:, a])
+        step *= np.minimum(1.0, TRUST / np.maximum(size, 1e-300))
+        xs[:, a] -= step
+        ready = a[(values.real > 0).all(axis=1) & (size < POLISH_BELOW)]
+        if ready.size:
+            polished, _, ok = _newton(
+                model,
+                _columns(p2, ready),
+                c2[:, ready],
+                xs[:, ready],
+                lam2[ready],
+                scratch,
+                ready,
+            )
+            xs[:, ready[ok]] = polished[:, ok]
+            found[ready[ok]] = True
+            polishes[ready[~ok]] += 1
+            alive[ready[polishes[ready] > POLISH_ATTEMPTS]] = False
+    distance = np.where(found, _norm(xs - x[:, both], scale), np.inf)
+    second = distance[m:] < distance[:m]
+    pick = np.where(second, np.arange(m) + m, np.arange(m))
+    if scratch.outs is not None:
+        full = found[pick] & scratch.done[pick]
+        checks.put(where[full], [o[:, pick[full]] for o in scratch.outs])
+    return xs[:, pick], found[pick]
 
 
-def _equilibria(
-    command: np.ndarray, outs: list[np.ndarray], snapped: np.ndarray | None = None
+# -------------------------------------------------------------------------- the load ramp
+
+_RUN, _DONE, _FOLD, _FAIL = range(4)
+
+
+def _initial(model: RingPairModel, command: np.ndarray) -> np.ndarray:
+    """The unloaded robot for each column: straight, tip angles = command."""
+    x = np.zeros((model.n_unknowns, command.shape[1]))
+    if model.n_unknowns > model.n_rod:
+        x[model.n_rod :] = command
+    return x
+
+
+def _ramp(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    checks: _Checks,
+    max_step: float = MAX_LOAD_STEP,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Follow each column from the unloaded robot (lambda = 0) to full load (lambda = 1)
+    (module docstring). Returns (x (n, N), reached full load, snapped, failure reasons);
+    the states reached are checked (in ``checks``).
+
+    Predictor: the state's tangent dx/dlambda = -(dr/dx)^-1 dr/dlambda (from the solver's
+    last evaluation), with the curvature of the branch from the change of the tangent
+    since the step before (a second-order predictor); from rest the tangent alone."""
+    kern = kernels(model)
+    n_cols = command.shape[1]
+    x = _initial(model, command)
+    scale = _scale(model, params, n_cols)
+    lam = np.zeros(n_cols)
+    lam_prev = np.full(n_cols, -1.0)
+    h = np.full(n_cols, max_step)
+    target = np.zeros(n_cols)
+    xs = x.copy()
+    corrections = np.zeros(n_cols, int)
+    last = np.full(n_cols, np.inf)
+    contraction = np.zeros(n_cols)  # the corrector's first contraction in this step
+    phase = np.full(n_cols, _RUN)
+    falls = np.zeros(n_cols, int)
+    refused = np.zeros(n_cols, bool)  # the current step was refused before
+    failure = np.full(n_cols, "", dtype=object)
+    # The tangent at rest: (dr/dx)^-1 = K^-1 there, and r is linear in the load (but for
+    # the rings' mutual torque, which goes with its square), so it is minus the relaxation
+    # direction at full load. The first step is sized so that it predicts a change of state
+    # of at most FIRST_DISPLACEMENT.
+    tangent = -kern.run("relaxation", [x, command, np.ones((1, n_cols))], params)[0]
+    tangent_prev = np.zeros_like(tangent)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h[:] = np.clip(FIRST_DISPLACEMENT / _norm(tangent, scale), MIN_LOAD_STEP, max_step)
+    h[~np.isfinite(h)] = max_step
+    tangent_xs = np.zeros_like(tangent)  # the tangent at the current iterate
+
+    def predict(cols: np.ndarray) -> None:
+        """Targets and predictions for the next step of columns ``cols``."""
+        target[cols] = np.minimum(lam[cols] + h[cols], 1.0)
+        step = (target[cols] - lam[cols])[None, :]
+        xs[:, cols] = x[:, cols] + step * tangent[:, cols]
+        curved = lam_prev[cols] >= 0
+        if curved.any():
+            c = cols[curved]
+            bend = (tangent[:, c] - tangent_prev[:, c]) / (lam[c] - lam_prev[c])
+            xs[:, c] += 0.5 * step[:, curved] ** 2 * bend
+        corrections[cols] = 0
+        last[cols] = np.inf
+        contraction[cols] = 0.0
+
+    def fall(f: np.ndarray) -> None:
+        """Columns f end in a fold at lam: they fall, a little further loaded."""
+        lam_fall = np.minimum(lam[f] + np.maximum(SETTLE_OVERSHOOT, h[f]), 1.0)
+        fallen, found = _fall(
+            model, _columns(params, f), command[:, f], x[:, f], lam_fall, checks, f
+        )
+        ok, lost = f[found], f[~found]
+        phase[lost] = _FAIL
+        failure[lost] = FAILURES["fold"]
+        x[:, ok] = fallen[:, found]
+        lam[ok] = lam_fall[found]
+        lam_prev[ok] = -1.0
+        tangent[:, ok] = 0.0  # unknown after a fall: the next predictor is the state itself
+        falls[ok] += 1
+        h[ok] = RESTART_STEP
+        phase[ok[lam[ok] >= 1.0]] = _DONE
+        rest = ok[lam[ok] < 1.0]
+        phase[rest] = _RUN
+        predict(rest)
+        too_many = ok[falls[ok] > MAX_FALLS]
+        phase[too_many] = _FAIL
+        failure[too_many] = FAILURES["falls"]
+
+    predict(np.arange(n_cols))
+    while True:
+        a = np.flatnonzero(phase == _RUN)
+        if a.size == 0:
+            f = np.flatnonzero(phase == _FOLD)
+            if f.size == 0:
+                break
+            fall(f)
+            continue
+        r, step, load_tangent, monitor = kern.run(
+            "newton", [xs[:, a], command[:, a], target[None, a]], _columns(params, a)
+        )
+        tangent_xs[:, a] = load_tangent
+        rn, sn = np.max(np.abs(r), axis=0), _norm(step, scale[:, a])
+        tol = np.where(target[a] >= 1.0, TOLERANCE, RAMP_TOLERANCE)
+        conv = rn < tol
+        small = np.max(np.abs(step), axis=0) < _step_tolerance(model, target[a])
+        candidate = conv | small
+        moved = np.isfinite(sn)  # every finite step is taken, a candidate's last one too
+        xs[:, a[moved]] -= step[:, moved]
+        contracting = (corrections[a] == 0) | (sn <= CONTRACTION * last[a])
+        give_up = ~candidate & (
+            ~np.isfinite(sn) | ~contracting | (corrections[a] >= MAX_CORRECTIONS)
+        )
+        refuse = give_up.copy()
+        accept = np.zeros(a.size, bool)
+        cand = a[candidate]
+        if cand.size:
+            converged, good = _judge(
+                model,
+                _columns(params, cand),
+                command[:, cand],
+                xs[:, cand],
+                target[cand],
+                monitor[:, candidate],
+                checks,
+                cand,
+            )
+            accept[candidate] = converged & good
+            refuse[candidate] = converged & ~good
+            stalled = cand[~converged & (corrections[cand] >= MAX_CORRECTIONS)]
+            phase[stalled] = _FAIL
+            failure[stalled] = FAILURES["stalled"]
+            accept[np.isin(a, stalled)] = False
+
+        acc = a[accept]
+        lam_prev[acc] = np.where(tangent[:, acc].any(axis=0), lam[acc], -1.0)
+        tangent_prev[:, acc] = tangent[:, acc]
+        x[:, acc], lam[acc], tangent[:, acc] = xs[:, acc], target[acc], tangent_xs[:, acc]
+        factor = np.sqrt(TARGET_CONTRACTION / np.maximum(contraction[acc], 1e-12))
+        growth = np.where(refused[acc], 1.0, GROWTH)  # no growth right after a refusal
+        h[acc] = np.minimum(h[acc] * np.clip(factor, 1 / SHRINK, growth), max_step)
+        refused[acc] = False
+        phase[acc[lam[acc] >= 1.0]] = _DONE
+        predict(acc[lam[acc] < 1.0])
+
+        ref = a[refuse & (phase[a] == _RUN)]
+        refused[ref] = True
+        with np.errstate(invalid="ignore", divide="ignore"):
+            theta = np.where(np.isfinite(sn) & np.isfinite(last[a]), sn / last[a], np.inf)
+        factor = np.sqrt(TARGET_CONTRACTION / np.maximum(theta[refuse & (phase[a] == _RUN)], 1e-12))
+        h[ref] *= np.clip(factor, 1 / SHRINK, 0.5)
+        phase[ref[h[ref] < MIN_LOAD_STEP]] = _FOLD
+        predict(ref[h[ref] >= MIN_LOAD_STEP])
+
+        carry_on = ~accept & ~refuse & (phase[a] == _RUN)
+        go = a[carry_on]
+        first = go[corrections[go] == 1]
+        contraction[first] = sn[carry_on][corrections[go] == 1] / last[first]
+        last[go] = sn[carry_on]
+        corrections[go] += 1
+    return x, phase == _DONE, falls > 0, failure
+
+
+# ------------------------------------------------------------------------ final states
+
+
+def _finish(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    reached: np.ndarray,
+    snapped: np.ndarray,
+    failure: np.ndarray,
+    checks: _Checks,
+    multistable: bool = False,
 ) -> Equilibria:
-    x, res, indicator, pos, frame, angles = outs
-    n = command.shape[1]
-    converged = res[0] < TOLERANCE
-    stable = converged & np.all(indicator > 0, axis=0)
-    nan = np.where(converged, 1.0, np.nan)
-    frames = frame.T.reshape(n, 3, 3).transpose(0, 2, 1) * nan[:, None, None]
+    """Check the states reached at full load (an unstable one falls once more), poses, and
+    the optional search for other stable states."""
+    n_cols = command.shape[1]
+    x = np.where(reached, x, np.nan)
+    todo = np.flatnonzero(~checks.done)
+    if todo.size or checks.outs is None:
+        todo = todo if checks.outs is not None else np.arange(n_cols)
+        checks.put(todo, _check(model, _columns(params, todo), command[:, todo], x[:, todo])[2])
+    outs = checks.outs
+    assert outs is not None
+    stable = reached & (np.max(np.abs(outs[0]), axis=0) < TOLERANCE) & _stable(model, outs[1])
+    fall = np.flatnonzero(reached & ~stable)
+    if fall.size:
+        fallen, found = _fall(
+            model,
+            _columns(params, fall),
+            command[:, fall],
+            x[:, fall],
+            np.ones(fall.size),
+            checks,
+            fall,
+        )
+        x[:, fall] = np.where(found, fallen, np.nan)
+        snapped[fall[found]] = True
+        stable[fall] = found
+        failure[fall[~found]] = FAILURES["unstable"]
+    failure[~stable & (failure == "")] = FAILURES["diverged"]
+    touching = stable & ~(outs[5][0] >= 0)
+    stable &= ~touching
+    failure[touching] = FAILURES["contact"]
+    multi = np.zeros(n_cols, bool)
+    if multistable and stable.any():
+        multi = _other_stable_states(model, params, command, x, stable)
+    r, _, position, frame, angles, _ = outs
+    nan = np.where(stable, 1.0, np.nan)
+    frames = frame.T.reshape(n_cols, 3, 3).transpose(0, 2, 1) * nan[:, None, None]
     return Equilibria(
         command=command.T.copy(),
         tip_angles=angles.T * nan[:, None],
-        position=pos.T * nan[:, None],
+        position=position.T * nan[:, None],
         tangent=frames[:, :, 0].copy(),
         frame=frames,
         unknowns=x.T * nan[:, None],
-        converged=converged,
+        converged=stable.copy(),
         stable=stable,
-        residual=res[0].copy(),
-        snapped=np.zeros(n, bool) if snapped is None else snapped,
+        residual=np.max(np.abs(r), axis=0),
+        snapped=snapped & stable,
+        multistable=multi,
+        failure=np.where(stable, "", failure).astype(object),
     )
+
+
+def _mirror(model: RingPairModel, x: np.ndarray) -> np.ndarray:
+    """The unknowns of the state turned by pi about the robot's axis (a start)."""
+    m = x.copy()
+    if model.linear_rod:
+        m[:4] = -x[:4]
+    else:
+        m[[1, 2, 4, 5]] = -x[[1, 2, 4, 5]]
+    return m
+
+
+def _other_stable_states(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    stable: np.ndarray,
+) -> np.ndarray:
+    """Whether another stable state exists at each command: Newton (then, if it lands on
+    an unstable equilibrium, a fall from there) from the straight robot at full load, from
+    the mirror image of the state and, with torsion, from the state with the rings' lags
+    mirrored."""
+    n_cols = command.shape[1]
+    starts = [_initial(model, command), _mirror(model, x)]
+    if model.n_unknowns > model.n_rod:
+        lagged = x.copy()
+        lagged[model.n_rod :] = 2 * command - x[model.n_rod :]
+        starts.append(lagged)
+    scale = _scale(model, params, n_cols)
+    found = np.zeros(n_cols, bool)
+    for start in starts:
+        todo = np.flatnonzero(stable & ~found)
+        if todo.size == 0:
+            break
+        p, c, ones = _columns(params, todo), command[:, todo], np.ones(todo.size)
+        scratch = _Checks(todo.size)
+        local = np.arange(todo.size)
+        states, converged, good = _newton(model, p, c, start[:, todo], ones, scratch, local)
+        unstable = np.flatnonzero(converged & ~good)
+        if unstable.size:
+            fallen, ok = _fall(
+                model,
+                _columns(p, unstable),
+                c[:, unstable],
+                states[:, unstable],
+                ones[unstable],
+                scratch,
+                unstable,
+            )
+            states[:, unstable] = fallen
+            good[unstable] = ok
+        distinct = _norm(states - x[:, todo], scale[:, todo]) > DISTINCT
+        found[todo[good & distinct]] = True
+    return found
+
+
+# ------------------------------------------------------------------------------ entries
 
 
 def _commands(theta1: ArrayLike, theta2: ArrayLike) -> np.ndarray:
@@ -244,26 +786,51 @@ def _commands(theta1: ArrayLike, theta2: ArrayLike) -> np.ndarray:
 
 
 def solve_equilibria(
-    model: RingPairModel, params: np.ndarray, theta1: ArrayLike, theta2: ArrayLike
+    model: RingPairModel,
+    params: np.ndarray,
+    theta1: ArrayLike,
+    theta2: ArrayLike,
+    *,
+    multistable: bool = False,
+    max_load_step: float = MAX_LOAD_STEP,
 ) -> Equilibria:
-    """Independent equilibria for commanded ring angles (theta1[i], theta2[i]). [rad]
+    """The state of each configuration on its own (commanded ring angles (theta1[i],
+    theta2[i]) [rad]): the stable equilibrium connected to the unloaded robot by the load
+    ramp (module docstring).
 
-    Each configuration starts from the straight robot. ``hysteresis`` needs an order, so
-    here it is ignored (the commands are taken as reached from the centre of the play);
-    use :func:`solve_sequence` for ordered commands.
-    params : model parameter vector, shape (n,), from ``model.parameters(design)``. [SI]
+    params : model parameter vector, shape (k,), from ``model.parameters(design)``, or one
+        per configuration, shape (k, N). [SI]
+    multistable : also look for other stable states at each command (costs a few more
+        solves per configuration).
+    max_load_step : largest step of the load ramp (smaller: a finer ramp, for checks).
+    ``hysteresis`` needs an order, so here it is ignored (the commands are taken as reached
+    from the centre of the play); use :func:`solve_sequence` for ordered commands.
     """
+    params = np.asarray(params, float)
     command = _commands(theta1, theta2)
-    return _equilibria(command, _solve_columns(model, np.asarray(params, float), command))
+    checks = _Checks(command.shape[1])
+    x, reached, snapped, failure = _ramp(model, params, command, checks, max_load_step)
+    return _finish(model, params, command, x, reached, snapped, failure, checks, multistable)
+
+
+def stable_states(
+    model: RingPairModel, params: np.ndarray, unknowns: np.ndarray, command: np.ndarray
+) -> np.ndarray:
+    """Whether each given state is a converged, stable equilibrium (the exact check).
+
+    unknowns : shape (n, N). command : shape (2, N). [SI]
+    """
+    return _check(model, np.asarray(params, float), command, unknowns)[1]
+
+
+# -------------------------------------------------------------------------- driven paths
 
 
 @lru_cache(maxsize=128)
-def _path_evaluators(model: RingPairModel, thread: int) -> tuple[BufferEvaluator, BufferEvaluator]:
-    """The single-configuration Newton solver and residual of ``model`` on reusable buffers,
-    one pair per thread (the buffers are not shared between threads)."""
-    return BufferEvaluator(newton_function(model)), BufferEvaluator(
-        compile_function(model.residual)
-    )
+def _path_evaluator(model: RingPairModel, thread: int) -> BufferEvaluator:
+    """The single-configuration Newton iteration of ``model`` on reusable buffers, one per
+    thread (the buffers are not shared between threads)."""
+    return BufferEvaluator(kernels(model).newton)
 
 
 def solve_sequence(
@@ -271,18 +838,14 @@ def solve_sequence(
 ) -> Equilibria:
     """Equilibria along an ordered path of commanded angles, as the robot is driven. [rad]
 
-    At the first command the robot enters its loads as on a bench (the field brought up):
-    every load is ramped from zero in ENTRY_STEPS, each Newton solve starting from the
-    previous state, so the robot starts on the branch connected to the straight rod and
-    not on whichever equilibrium Newton from the straight robot happens to reach (near a
-    strong magnet that can be an unstable one). Each later command is reached in sub-steps
-    of at most SUBSTEP in the same way, so the robot stays on its branch. With
-    ``hysteresis`` the commands first pass through each transmission's play
-    (:func:`design.friction.play`). Where the branch ends (Newton fails
-    or the state turns unstable) the robot falls into the nearest stable state (Newton from
-    small perturbations), and where that or a plain step changes a ring's lag by more than
-    SNAP_LAG_JUMP, ``snapped`` is set for that command (the first command too, if the robot
-    cannot start there).
+    The first command's state is that of the configuration on its own (the load ramp of
+    :func:`solve_equilibria`: the robot enters its loads as on a bench). Each later command
+    is reached in sub-steps of at most SUBSTEP, each Newton solve starting from the
+    previous state, so the robot stays on its branch. With ``hysteresis`` the commands
+    first pass through each transmission's play (:func:`design.friction.play`). Where the
+    branch ends (Newton stops contracting or the state crosses a fold) the robot falls into
+    the stable state it relaxes to, and where that or a plain step changes a ring's lag by
+    more than SNAP_LAG_JUMP, ``snapped`` is set for that command.
     """
     params = np.asarray(params, float)
     command = _commands(theta1, theta2)
@@ -292,89 +855,80 @@ def solve_sequence(
             [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
         )
         effective = play(command, width)
-    solver, residual = _path_evaluators(model, threading.get_ident())
+    newton_eval = _path_evaluator(model, threading.get_ident())
+    scale = model.unknown_scale(params)
+    n_rod = model.n_rod
+    torsion = model.n_unknowns > n_rod
+    step_tolerance = float(_step_tolerance(model, np.ones(1))[0])
 
-    def solve(x0: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray]:
-        return solver.flat(x0, c, p)
+    def newton(x0: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Newton from x0 at the command c; (state, converged on the stable side)."""
+        x, last = x0.copy(), np.inf
+        for k in range(MAX_CORRECTIONS + 2):
+            r, step, _, monitor = newton_eval.flat(x, c, 1.0, params)
+            size = float(np.max(np.abs(step) / scale))
+            if not np.isfinite(size) or (k > 0 and size > CONTRACTION * last):
+                return x, False
+            if np.max(np.abs(step)) < step_tolerance or np.max(np.abs(r)) < TOLERANCE:
+                return x - step, bool(_fold_free(model, monitor[:, None])[0])
+            x, last = x - step, size
+        return x, False
 
-    def settle(x: np.ndarray, c: np.ndarray, p: np.ndarray = params) -> list[np.ndarray] | None:
-        """The stable state a real robot falls into from an unstable or lost one: from small
-        perturbations of x, relax downhill (x <- x - r/2: -r points down the potential for
-        these scaled residuals), then polish by Newton; the nearest stable result."""
-        n_rod = model.n_unknowns - (2 if "torsion" in model.effects else 0)
-        best, best_dist = None, np.inf
-        for i in range(model.n_unknowns):
-            step = SETTLE_ANGLE if i >= n_rod else 0.01 * max(abs(x[i]), 1e-3)
-            for sign in (1.0, -1.0):
-                xr = x.copy()
-                xr[i] += sign * step
-                for _ in range(SETTLE_RELAXATION):
-                    xr = xr - 0.5 * residual(xr, c, p)[0].ravel()
-                if not np.isfinite(xr).all():
-                    continue
-                out = solve(xr, c, p)
-                dist = np.abs(out[0] - x).max()
-                if _stable(out) and dist < best_dist:
-                    best, best_dist = out, dist
-        return best
+    def lags(x: np.ndarray, c: np.ndarray) -> np.ndarray:
+        return x[n_rod:] - c if torsion else np.zeros(2)
 
-    def enter(c: np.ndarray) -> tuple[list[np.ndarray], bool]:
-        """The state at the first command ``c`` after the loads are ramped up, and whether
-        the robot snapped on the way."""
-        p = params.copy()
-        jumped = False
-        out = None
-        for lam in np.linspace(0.0, 1.0, ENTRY_STEPS + 1)[1:]:
-            p[scale] = lam * params[scale]
-            if out is None:
-                out = [o[:, 0] for o in _solve_columns(model, p, c[:, None])]
-            else:
-                out = solve(out[0], c, p)
-            if not _stable(out):
-                settled = settle(out[0], c, p) if np.isfinite(out[0]).all() else None
-                if settled is None:  # lost the branch: the plain solve at full load
-                    plain = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
-                    return (plain if _stable(plain) else settle(plain[0], c) or plain), True
-                out, jumped = settled, True
-        assert out is not None
-        return out, jumped
+    def fall(x: np.ndarray, c: np.ndarray) -> np.ndarray:
+        fallen, found = _fall(
+            model, params, c[:, None], x[:, None], np.ones(1), _Checks(1), np.arange(1)
+        )
+        return fallen[:, 0] if found[0] else np.full_like(x, np.nan)
 
-    scale = index("load_scale")
+    def alone(c: np.ndarray) -> tuple[np.ndarray, bool, str]:
+        """The state at c as a configuration on its own: (state or NaN, snapped, failure)."""
+        x, ok, snap, why = _ramp(model, params, c[:, None], _Checks(1))
+        return (x[:, 0] if ok[0] else np.full(model.n_unknowns, np.nan)), bool(snap[0]), why[0]
+
     snapped = np.zeros(command.shape[1], bool)
-    first, snapped[0] = enter(effective[:, 0])
-    columns = [first]
+    failure = np.full(command.shape[1], "", dtype=object)
+    first, snapped[0], failure[0] = alone(effective[:, 0])
+    states = [first]
     stride = 1
     for k in range(1, command.shape[1]):
-        prev = columns[-1]
+        prev = states[-1]
         a, b = effective[:, k - 1], effective[:, k]
+        if not np.isfinite(prev).all():  # lost: start again as a configuration on its own
+            x, snapped[k], failure[k] = alone(b)
+            states.append(x)
+            continue
         n_sub = max(1, int(np.ceil(np.abs(b - a).max() / SUBSTEP)))
         path = a[:, None] + np.outer(b - a, np.arange(n_sub + 1) / n_sub)  # (2, n_sub + 1)
-        lag = prev[5] - a
+        lag = lags(prev, a)
         j = 0
         while j < n_sub:
             step = min(stride, n_sub - j)
             c = path[:, j + step]
-            out = solve(prev[0], c)
-            new_lag = out[5] - c
-            stable = _stable(out)
-            jump = abs(new_lag - lag).max()
-            if step > 1 and not (stable and jump < SMOOTH_LAG_CHANGE):
+            out, ok = newton(prev, c)
+            jump = float(np.abs(lags(out, c) - lag).max()) if ok else np.inf
+            if step > 1 and not (ok and jump < SMOOTH_LAG_CHANGE):
                 stride = 1  # not plainly smooth: look again in single sub-steps
                 continue
-            if not stable or jump > SNAP_LAG_JUMP:
+            if not ok:
                 snapped[k] = True
-                if not stable:
-                    settled = settle(out[0] if np.isfinite(out[0]).all() else prev[0], c)
-                    if settled is None:
-                        settled = [o[:, 0] for o in _solve_columns(model, params, c[:, None])]
-                    out = settled
-                    new_lag = out[5] - c
+                out = fall(out if np.isfinite(out).all() else prev, c)
+                if not np.isfinite(out).all():
+                    prev = out
+                    failure[k] = FAILURES["unstable"]
+                    break
+                jump = float(np.abs(lags(out, c) - lag).max())
+            if jump > SNAP_LAG_JUMP:
+                snapped[k] = True
             stride = min(2 * stride, MAX_STRIDE) if jump < SMOOTH_LAG_CHANGE / 2 else 1
-            prev, lag = out, new_lag
+            prev, lag = out, lags(out, c)
             j += step
-        columns.append(prev)
-    outs = [np.column_stack([col[i] for col in columns]) for i in range(6)]
-    eq = _equilibria(effective, outs, snapped)
+        states.append(prev)
+    x = np.column_stack(states)
+    reached = np.isfinite(x).all(axis=0)
+    eq = _finish(model, params, effective, x, reached, snapped, failure, _Checks(x.shape[1]))
     return Equilibria(**{**eq.__dict__, "command": command.T.copy()})
 
 
@@ -384,12 +938,17 @@ def solve_design(
     theta2: ArrayLike,
     model: RingPairModel | None = None,
     ordered: bool = False,
+    multistable: bool = False,
 ) -> Equilibria:
-    """Equilibria of ``design`` (baseline model unless given) for commanded angles. [rad]
+    """The states of ``design`` (baseline model unless given) for commanded angles. [rad]
 
     ordered : follow the commands as a path (:func:`solve_sequence`) instead of solving
-        each from the straight robot; required for ``hysteresis`` and snap-through.
+        each on its own; required for ``hysteresis`` and to see snap-through along a path.
+    multistable : look for other stable states (configurations on their own only).
     """
     model = model or RingPairModel()
-    solve = solve_sequence if ordered else solve_equilibria
-    return solve(model, model.parameters(design), theta1, theta2)
+    if ordered:
+        return solve_sequence(model, model.parameters(design), theta1, theta2)
+    return solve_equilibria(
+        model, model.parameters(design), theta1, theta2, multistable=multistable
+    )

@@ -19,9 +19,11 @@ friction. Effects (spec/formats.md names), each reducing to the baseline in its 
 
 Unknowns x: rod coordinates (linear: q = (dy, dz, phi_y, phi_z); large deflection: the
 base internal force n0 and moment m0, scaled to (n0 L^3 / EI, m0 L / EI)), then the tip
-angles with ``torsion``. The residual is
-scaled to metres/radians (its infinity norm is the convergence measure). SI units are
-used for all inputs and outputs.
+angles with ``torsion``. The residual is scaled to metres/radians (its infinity norm is
+the convergence measure). Every load (field, gravity, the rings' mutual torque) is
+multiplied by the parameter ``load_scale`` (1: physical), along which
+:mod:`design.equilibrium` ramps the robot from its unloaded state. SI units are used for
+all inputs and outputs.
 """
 
 from __future__ import annotations
@@ -34,8 +36,9 @@ import numpy as np
 
 from design import cantilever, rod
 from design.dipole import dipole_field, dipole_field_gradient
+from design.geometry import cylinder_distance, ring_radius
 from design.magnets import cylinder_moment, ring_moment, ring_volume
-from design.parameters import NAMES, parameter_vector
+from design.parameters import NAMES, index, parameter_vector
 from design.params import Design
 from design.sections import polar_moment_of_area, second_moment_of_area, shear_modulus
 from design.wrench import tip_wrench
@@ -118,28 +121,80 @@ class Symbols(dict):
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
 
 
+COARSE_STEPS = 5
+"""Runge-Kutta steps of the rod from which the solver's Newton matrix is built (the
+residual always uses :data:`design.rod.STEPS`): its relative error, about 1e-4, only makes
+Newton's convergence linear at that rate, for a quarter of the cost of the exact matrix."""
+
+
+def sylvester_minors(stiffness: ca.SX) -> ca.SX:
+    """Leading principal minors of the symmetric part of ``stiffness`` after a diagonal
+    congruence scaling (Sylvester's criterion: all > 0 iff positive definite). [-]"""
+    n = stiffness.size1()
+    hs = 0.5 * (stiffness + stiffness.T)
+    scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
+    hn = hs * (scale @ scale.T)
+    return ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
+
+
+def magnet_clearance(s: Symbols, position: ca.SX, frame: ca.SX) -> ca.SX:
+    """Clearance of the tip rings to the external magnet: the smaller distance of the two
+    ring centres (the rod tip and one spacing along the tip tangent) to the cylinder, less
+    the radius of the sphere that holds a ring; negative where they touch. [m]"""
+    half, radius = s["external_length"] / 2, s["external_diameter"] / 2
+    reach = ring_radius(s["ring_outer_diameter"], s["ring_length"])
+    distances = [
+        cylinder_distance(centre - s.external_center, s.external_axis, radius, half)
+        for centre in (position, position + s.ring_spacing * frame[:, 0])
+    ]
+    return ca.fmin(*distances) - reach
+
+
 @dataclass(frozen=True)
 class RingPairModel:
     """The model with a set of effects switched on (empty: the baseline).
 
-    Built once, as CasADi functions:
-    ``residual`` (x, command, params) -> (r, dr/dx): r = 0 at equilibrium, in m or rad;
-    ``stability`` (x, command, params) -> indicator, all entries > 0 iff stable;
-    ``pose`` (x, command, params) -> (position (3), frame (3x3), tip angles (2));
-    ``initial`` (command, params) -> x0, the straight robot with tip angles = command;
-    ``predictor`` (large_deflection only; else None) (x_linear, command, params) -> x0, a
-    start from the equilibrium x_linear of :meth:`linear` (the same effects on the linear
-    rod).
-    ``command`` are the ring angles set at the base (theta1 distal, theta2 proximal) [rad].
+    Built once, as CasADi functions of (x, command, params), ``command`` being the ring
+    angles set at the base (theta1 distal, theta2 proximal) [rad]:
+
+    - ``residual`` -> (r, dr/dx): r = 0 at equilibrium, in m or rad, with exact
+      derivatives (NLPs, sensitivities);
+    - ``newton`` -> (r, Newton's step (dr/dx)^-1 r, load tangent dx/d(load_scale) =
+      -(dr/dx)^-1 dr/d(load_scale), stability monitor), the equilibrium solver's iteration;
+    - ``relaxation`` -> K^-1 r (K = dr/dx with the loads frozen: the robot's own elastic
+      stiffness; -K^-1 r points down the total potential), how the robot falls;
+    - ``modes`` -> (K^-1 r, M = K^-1 dr/dx column-major): the eigenvectors of M are the
+      robot's modes (the one with the smallest eigenvalue is where it leaves a fold), its
+      eigenvalues their stiffness relative to the elastic one;
+    - ``check`` -> (r, monitor, position, frame, tip angles, clearance of the rings to the
+      external magnet (:func:`magnet_clearance`)), for a final state;
+    - ``pose`` -> (position (3), frame (3x3), tip angles (2));
+    - ``initial`` (command, params) -> x0, the unloaded robot (straight, tip angles =
+      command).
+
+    Stability monitor. Linear rod: the Sylvester minors of the stiffness form (all > 0 iff
+    the equilibrium is stable). Large-deflection rod: the matrix M = K^-1 dr/dx,
+    column-major; its eigenvalues are those of the compliance-weighted Hessian of the total
+    potential, so the state is stable iff all have positive real parts, and det M changes
+    sign at every fold (:mod:`design.equilibrium`). The solver's matrices of the
+    large-deflection rod (``newton``, ``relaxation``, the monitors) come from a
+    COARSE_STEPS integration of the same rod: their relative error, about 1e-5, makes
+    Newton converge linearly at that rate and places a fold to that accuracy, for a fifth
+    of the cost; the residual, the pose and ``residual``'s dr/dx are those of the full
+    :data:`design.rod.STEPS` integration.
     """
 
     effects: frozenset[str] = frozenset()
     n_unknowns: int = field(init=False)
+    n_rod: int = field(init=False)
+    linear_rod: bool = field(init=False)
     residual: ca.Function = field(init=False, repr=False, compare=False)
-    stability: ca.Function = field(init=False, repr=False, compare=False)
+    newton: ca.Function = field(init=False, repr=False, compare=False)
+    relaxation: ca.Function = field(init=False, repr=False, compare=False)
+    modes: ca.Function = field(init=False, repr=False, compare=False)
+    check: ca.Function = field(init=False, repr=False, compare=False)
     pose: ca.Function = field(init=False, repr=False, compare=False)
     initial: ca.Function = field(init=False, repr=False, compare=False)
-    predictor: ca.Function | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         effects = frozenset(self.effects)
@@ -150,9 +205,12 @@ class RingPairModel:
                 f"unknown model effect(s) {sorted(unknown)}; expected any of {list(EFFECTS)}"
             )
         large = "large_deflection" in effects
+        torsion = "torsion" in effects
         n_rod = 6 if large else 4
-        n = n_rod + (2 if "torsion" in effects else 0)
+        n = n_rod + (2 if torsion else 0)
         object.__setattr__(self, "n_unknowns", n)
+        object.__setattr__(self, "n_rod", n_rod)
+        object.__setattr__(self, "linear_rod", not large)
 
         x = ca.SX.sym("x", n)
         command = ca.SX.sym("command", 2)
@@ -160,10 +218,200 @@ class RingPairModel:
         s = Symbols(prm)
         load = s["load_scale"]
         length, ei = s["free_length"], s.bending_rigidity
+        angles = x[n_rod:] if torsion else command
+        moment = load * s.ring_moment
+        weight_rate = ca.SX.zeros(3)  # distributed load per unit load_scale [N/m]
+        if "gravity" in effects:
+            weight_rate = s.rod_mass_per_length * s.gravity
+        distributed = load * weight_rate
+        field_model = self._field_model(s)
+
+        def applied(position: ca.SX, frame: ca.SX, tip_angles: ca.SX) -> ca.SX:
+            """Loads at a tip pose: force (3) [N] and moment about the tip (3) [N m], base
+            frame, then with torsion the axial torque on each ring (2) [N m]."""
+            force, torque = tip_wrench(
+                field_model, position, frame, tip_angles, moment, s.ring_spacing
+            )
+            if "gravity" in effects:
+                g = load * s.gravity
+                ring_weight = s.ring_mass * g
+                force = force + 2 * ring_weight + s["tip_mass"] * g
+                torque = torque + s.ring_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
+            out = [force, torque]
+            if torsion:
+                out.append(
+                    self._axial_torques(field_model, position, frame, tip_angles, moment, s, load)
+                )
+            return ca.vertcat(*out)
+
+        # Twist of each transmission per unit axial torque, L / GJ. [rad / (N m)]
+        twist = length / s.torsional_rigidity if torsion else None
+
+        def with_twist(r_rod: ca.SX, loads: ca.SX) -> ca.SX:
+            if twist is None:
+                return r_rod
+            return ca.vertcat(r_rod, angles - command - twist * loads[6:8])
+
+        if large:
+            kirchhoff = self._kirchhoff(x, prm, s, angles, weight_rate, applied, with_twist, twist)
+            r, jac, jac_solver, k_solver, dr_dload, position, frame = kirchhoff
+            monitor_solver = modes = ca.vec(ca.solve(k_solver, jac_solver))
+            relaxation = ca.solve(k_solver, r)
+        else:
+            position, frame = cantilever.tip_pose(x[:4], length)
+            loads = applied(position, frame, angles)
+            bending = cantilever.bending_load(loads[0:3], loads[3:6], frame[:, 0])
+            r_rod = (
+                x[:4]
+                - cantilever.compliance(length, ei) @ bending
+                - cantilever.distributed_load_response(distributed, length, ei)
+            )
+            r = with_twist(r_rod, loads)
+            jac_solver = jac = ca.jacobian(r, x)
+            dr_dload = ca.jacobian(r, load)
+            stiffness = [cantilever.stiffness(length, ei)]
+            if torsion:
+                stiffness.append(ca.diag(s.torsional_rigidity / length))
+            # The stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the
+            # total potential for these (to first order conservative) loads: positive
+            # definite iff stable (Sylvester's criterion).
+            monitor_solver = sylvester_minors(ca.diagcat(*stiffness) @ jac)
+            relaxation = r  # with the loads frozen dr/dx = I
+            modes = ca.vec(jac)
+        # Newton's step and the load tangent share one factorisation.
+        newton_solve = ca.solve(jac_solver, ca.horzcat(r, -dr_dload))
+        io = ["x", "command", "params"]
+        opts = {"cse": True}
+        arguments = [x, command, prm]
+        functions = {
+            "residual": ca.Function("residual", arguments, [r, jac], io, ["r", "dr_dx"], opts),
+            "newton": ca.Function(
+                "newton",
+                arguments,
+                [r, newton_solve[:, 0], newton_solve[:, 1], monitor_solver],
+                io,
+                ["r", "step", "load_tangent", "monitor"],
+                opts,
+            ),
+            "relaxation": ca.Function(
+                "relaxation", arguments, [relaxation], io, ["direction"], opts
+            ),
+            "modes": ca.Function(
+                "modes", arguments, [relaxation, modes], io, ["direction", "M"], opts
+            ),
+            "check": ca.Function(
+                "check",
+                arguments,
+                [r, monitor_solver, position, frame, angles, magnet_clearance(s, position, frame)],
+                io,
+                ["r", "monitor", "position", "frame", "tip_angles", "clearance"],
+                opts,
+            ),
+            "pose": ca.Function(
+                "pose",
+                arguments,
+                [position, frame, angles],
+                io,
+                ["position", "frame", "tip_angles"],
+                opts,
+            ),
+        }
+        x0 = ca.vertcat(ca.SX.zeros(n_rod), command) if torsion else ca.SX.zeros(n_rod)
+        functions["initial"] = ca.Function(
+            "initial", [command, prm], [x0], ["command", "params"], ["x0"], opts
+        )
+        for name, fn in functions.items():
+            object.__setattr__(self, name, fn)
+
+    def _kirchhoff(self, x, prm, s, angles, weight_rate, applied, with_twist, twist):
+        """Residual, derivatives and pose of the large-deflection rod (:mod:`design.rod`).
+
+        The rod unknowns are the base wrench (n0, m0), scaled to deflection units
+        (n0 L^3 / EI, m0 L / EI) [m, rad], so that they, the residual and the linear rod's
+        coordinates share one scale; the residual is the tip boundary condition
+        (n(L) - f, m(L) - tau), scaled alike. dr/dx follows from the shooting map's
+        sensitivities by the chain rule, and so do K (the loads frozen: the rod's own tip
+        wrench against its base wrench) and dr/d(load_scale). Returns (r, dr/dx, and from
+        COARSE_STEPS the solver's dr/dx, K and dr/d(load_scale), tip position, tip frame).
+        """
+        n_rod = self.n_rod
+        length, ei = s["free_length"], s.bending_rigidity
+        load = s["load_scale"]
+        wrench_scale = ca.vertcat(ei / length**3 * ca.DM.ones(3), ei / length * ca.DM.ones(3))
+        row_scale = ca.vertcat(length**3 / ei * ca.DM.ones(3), length / ei * ca.DM.ones(3))
+        base_wrench = x[:n_rod] * wrench_scale
+        p_sym, q_sym = ca.SX.sym("position", 3), ca.SX.sym("quaternion", 4)
+        a_sym = ca.SX.sym("tip_angles", 2)
+        loads = applied(p_sym, rod.frame_from_quaternion(q_sym), a_sym)
+        loads_at = ca.Function(
+            "tip_loads",
+            [p_sym, q_sym, a_sym, prm],
+            [
+                loads,
+                ca.jacobian(loads, ca.vertcat(p_sym, q_sym)),
+                ca.jacobian(loads, a_sym),
+                ca.jacobian(loads, load),
+            ],
+            {"cse": True},
+        )
+        twist_rows = None if twist is None else ca.diag(twist)
+
+        def at(tip: ca.SX):
+            """The residual at an integrated tip, and the loads' derivatives there."""
+            tip_loads, d_pose, d_angles, d_load = loads_at(tip[0:3], tip[3:7], angles, prm)
+            rod_wrench = ca.vertcat(base_wrench[0:3] - load * weight_rate * length, tip[7:10])
+            r = with_twist(row_scale * (rod_wrench - tip_loads[:6]), tip_loads)
+            return r, (d_pose, d_angles, d_load)
+
+        def derivatives(sens: ca.SX, loads_derivatives) -> tuple[ca.SX, ca.SX, ca.SX]:
+            """(dr/dx, K, dr/d(load_scale)) from the shooting sensitivities (columns: n0,
+            m0, the load factor) and the loads' derivatives at the tip."""
+            d_pose, d_angles, d_load = loads_derivatives
+            d_rod = ca.vertcat(
+                ca.horzcat(ca.SX.eye(3), ca.SX.zeros(3, 3), -weight_rate * length),
+                sens[7:10, :],
+            )
+            d_loads = d_pose @ sens[0:7, :]
+            d_loads[:, 6] += d_load
+            k = ca.diag(row_scale) @ d_rod[:, :6] @ ca.diag(wrench_scale)
+            j = k - ca.diag(row_scale) @ d_loads[:6, :6] @ ca.diag(wrench_scale)
+            dr_dload = row_scale * (d_rod[:, 6] - d_loads[:6, 6])
+            if twist_rows is not None:
+                j = ca.vertcat(
+                    ca.horzcat(j, -ca.diag(row_scale) @ d_angles[:6, :]),
+                    ca.horzcat(
+                        -twist_rows @ d_loads[6:8, :6] @ ca.diag(wrench_scale),
+                        ca.SX.eye(2) - twist_rows @ d_angles[6:8, :],
+                    ),
+                )
+                k = ca.diagcat(k, ca.SX.eye(2))
+                dr_dload = ca.vertcat(dr_dload, -twist * d_loads[6:8, 6])
+            return j, k, dr_dload
+
+        def shoot(steps: int, sensitivities: bool = False):
+            rate = weight_rate if sensitivities else None
+            return rod.shoot(base_wrench, length, ei, load * weight_rate, steps, rate)
+
+        tip, _ = shoot(rod.STEPS)
+        r, loads_derivatives = at(tip)
+        # The solver's matrices: the coarse integration's sensitivities with the loads'
+        # derivatives at the (full) tip, where the residual needs the loads anyway.
+        _, coarse = shoot(COARSE_STEPS, True)
+        jac_solver, k_solver, dr_dload = derivatives(coarse, loads_derivatives)
+        # The exact dr/dx: sensitivities and loads of one full integration.
+        tip_exact, exact = shoot(rod.STEPS, True)
+        jac = derivatives(exact, at(tip_exact)[1])[0]
+        frame = rod.frame_from_quaternion(tip[3:7])
+        return r, jac, jac_solver, k_solver, dr_dload, tip[0:3], frame
+
+    def _field_model(self, s: Symbols):
+        """p (3) [m] -> (B [T], dB/dp [T/m]) of the external magnet: the exact cylinder with
+        ``near_field``, else its point dipole."""
+        near = "near_field" in self.effects
 
         def field_model(p: ca.SX) -> tuple[ca.SX, ca.SX]:
             offset = p - s.external_center
-            if "near_field" in effects:
+            if near:
                 from design.cylinder_field import cylinder_field
 
                 return cylinder_field(
@@ -177,126 +425,17 @@ class RingPairModel:
                 offset, s.external_moment
             )
 
-        angles = x[n_rod : n_rod + 2] if "torsion" in effects else command
-        moment = load * s.ring_moment
-        distributed = ca.SX.zeros(3)
-        if "gravity" in effects:
-            distributed = s.rod_mass_per_length * load * s.gravity
+        return field_model
 
-        def tip_loads(position: ca.SX, frame: ca.SX, angles: ca.SX = angles) -> tuple[ca.SX, ca.SX]:
-            """Force and moment about the rod tip at this tip pose. [N, N m]"""
-            force, torque = tip_wrench(field_model, position, frame, angles, moment, s.ring_spacing)
-            if "gravity" in effects:
-                g = load * s.gravity
-                ring_weight = s.ring_mass * g
-                force = force + 2 * ring_weight + s["tip_mass"] * g
-                torque = torque + s.ring_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
-            return force, torque
-
-        q = x[:n_rod]
-        # Rod unknowns of the large-deflection rod: the base wrench (n0, m0), scaled to
-        # deflection units (n0 L^3 / EI, m0 L / EI) [m, rad], so that they, the residual and
-        # the linear rod's coordinates all share one scale (Newton's tolerance, settling).
-        wrench_scale = ca.vertcat(ei / length**3 * ca.DM.ones(3), ei / length * ca.DM.ones(3))
-        if large:
-            r_dimless, rod_state = rod.boundary_residual(
-                q * wrench_scale, length, ei, tip_loads, distributed
-            )
-            position, frame = rod_state.position, rod_state.frame
-            r_rod = r_dimless * ca.vertcat(length * ca.DM.ones(3), ca.DM.ones(3))
-        else:
-            position, frame = cantilever.tip_pose(q, length)
-            force, torque = tip_loads(position, frame)
-            bending = cantilever.bending_load(force, torque, frame[:, 0])
-            r_rod = (
-                q
-                - cantilever.compliance(length, ei) @ bending
-                - cantilever.distributed_load_response(distributed, length, ei)
-            )
-        stiffness = [cantilever.stiffness(length, ei)]
-        residual = [r_rod]
-        if "torsion" in effects:
-            axial = self._axial_torques(field_model, position, frame, angles, moment, s, load)
-            residual.append(angles - command - axial * length / s.torsional_rigidity)
-            stiffness.append(ca.diag(s.torsional_rigidity / length))
-        r = ca.vertcat(*residual)
-        jac = ca.jacobian(r, x)
-        if large:
-            # Shooting unknowns have no stiffness form; a fold (snap-through) of the whole
-            # system, where one mode loses stability, is where det(dr/dx) changes sign.
-            # Unloaded, dr/dx = I, so det > 0 holds on every branch connected to rest
-            # without crossing a fold. Symmetric (double) bifurcations are not seen.
-            indicator = ca.det(jac)
-        else:
-            # Stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the total
-            # potential for these conservative loads; its symmetric part positive definite
-            # (Sylvester's criterion after a diagonal congruence scaling) means stable.
-            h = ca.diagcat(*stiffness) @ jac
-            hs = 0.5 * (h + h.T)
-            scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
-            hn = hs * (scale @ scale.T)
-            indicator = ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
-
-        rod0 = ca.SX.zeros(n_rod)
-        x_start = ca.vertcat(rod0, command) if "torsion" in effects else rod0
-        predictor = None
-        if large:
-            # Newton starts from the base wrench that holds the straight rod, or, better
-            # (``predictor``), from the wrench of the linear model's equilibrium x_lin,
-            # balanced about its tip: n0 = f + q L, m0 = tau + p x f + L^2/2 e1 x q. A start
-            # from the straight rod under a large tip moment would coil the rod (psi = M L/EI)
-            # and Newton could settle on a far branch.
-            straight = ca.vertcat(length, 0, 0), ca.SX.eye(3)
-            base = rod.straight_base_wrench(*tip_loads(*straight), length, distributed)
-            rod0 = ca.substitute(base / wrench_scale, x, x_start)
-            x_lin = ca.SX.sym("x_linear", 4 + n - n_rod)
-            lin_angles = x_lin[4:] if "torsion" in effects else command
-            p_lin, frame_lin = cantilever.tip_pose(x_lin[:4], length)
-            f, tau = tip_loads(p_lin, frame_lin, lin_angles)
-            e1 = ca.DM([1.0, 0.0, 0.0])
-            base = ca.vertcat(
-                f + distributed * length,
-                tau + ca.cross(p_lin, f) + length**2 / 2 * ca.cross(e1, distributed),
-            )
-            predictor = ca.Function(
-                "predictor",
-                [x_lin, command, prm],
-                [ca.vertcat(base / wrench_scale, x_lin[4:])],
-                ["x_linear", "command", "params"],
-                ["x0"],
-                {"cse": True},
-            )
-        object.__setattr__(self, "predictor", predictor)
-        x0 = ca.vertcat(rod0, command) if "torsion" in effects else rod0
-        io = ["x", "command", "params"]
-        opts = {"cse": True}
-        object.__setattr__(
-            self,
-            "residual",
-            ca.Function("residual", [x, command, prm], [r, jac], io, ["r", "dr_dx"], opts),
-        )
-        object.__setattr__(
-            self,
-            "stability",
-            ca.Function("stability", [x, command, prm], [indicator], io, ["indicator"], opts),
-        )
-        object.__setattr__(
-            self,
-            "pose",
-            ca.Function(
-                "pose",
-                [x, command, prm],
-                [position, frame, angles],
-                io,
-                ["position", "frame", "tip_angles"],
-                opts,
-            ),
-        )
-        object.__setattr__(
-            self,
-            "initial",
-            ca.Function("initial", [command, prm], [x0], ["command", "params"], ["x0"], opts),
-        )
+    def unknown_scale(self, params: np.ndarray) -> np.ndarray:
+        """Scale of each unknown for dimensionless norms: the free length for those in
+        metres, 1 for angles; shape (n_unknowns,) for params (k,), (n_unknowns, N) for
+        params (k, N). [m or rad]"""
+        params = np.asarray(params, float)
+        length = params[index("free_length")]
+        out = np.ones((self.n_unknowns,) + length.shape)
+        out[: 2 if self.linear_rod else 3] = length
+        return out
 
     @staticmethod
     def _axial_torques(field_model, position, frame, angles, moment, s, load) -> ca.SX:

@@ -113,6 +113,30 @@ def _derivative(
     return t, dq, ca.cross(force, t)
 
 
+def _rk4_step(state: ca.SX, force: ca.SX, load: ca.SX, h: ca.SX, ei: ca.SX) -> ca.SX:
+    """One classical Runge-Kutta step of the state (p, Q, m), expression. [SI]"""
+    quaternion, moment = state[3:7], state[7:10]
+    k1 = _derivative(quaternion, moment, force, ei)
+    k2 = _derivative(quaternion + h / 2 * k1[1], moment + h / 2 * k1[2], force - load * (h / 2), ei)
+    k3 = _derivative(quaternion + h / 2 * k2[1], moment + h / 2 * k2[2], force - load * (h / 2), ei)
+    k4 = _derivative(quaternion + h * k3[1], moment + h * k3[2], force - load * h, ei)
+    increments = [h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]) for i in range(3)]
+    return state + ca.vertcat(*increments)
+
+
+def _step_symbols() -> list[ca.SX]:
+    return [
+        ca.SX.sym("state", 10),
+        ca.SX.sym("force", 3),
+        ca.SX.sym("distributed_load", 3),
+        ca.SX.sym("h"),
+        ca.SX.sym("bending_rigidity"),
+    ]
+
+
+_STEP_NAMES = ["state", "force", "distributed_load", "h", "bending_rigidity"]
+
+
 @lru_cache(maxsize=1)
 def step_function() -> ca.Function:
     """One classical Runge-Kutta step of the rod, as a never-inlined CasADi function.
@@ -122,26 +146,96 @@ def step_function() -> ca.Function:
     Output: the state at s + h (10). The internal force along the step is n - q (s' - s),
     exact.
     """
-    state = ca.SX.sym("state", 10)
-    force = ca.SX.sym("force", 3)
-    load = ca.SX.sym("distributed_load", 3)
-    h = ca.SX.sym("h")
-    ei = ca.SX.sym("bending_rigidity")
-    quaternion, moment = state[3:7], state[7:10]
-    k1 = _derivative(quaternion, moment, force, ei)
-    k2 = _derivative(quaternion + h / 2 * k1[1], moment + h / 2 * k1[2], force - load * (h / 2), ei)
-    k3 = _derivative(quaternion + h / 2 * k2[1], moment + h / 2 * k2[2], force - load * (h / 2), ei)
-    k4 = _derivative(quaternion + h * k3[1], moment + h * k3[2], force - load * h, ei)
-    increments = [h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]) for i in range(3)]
-    new_state = state + ca.vertcat(*increments)
+    args = _step_symbols()
     return ca.Function(
         "rod_rk4_step",
-        [state, force, load, h, ei],
-        [new_state],
-        ["state", "force", "distributed_load", "h", "bending_rigidity"],
+        args,
+        [_rk4_step(*args)],
+        _STEP_NAMES,
         ["next_state"],
         {"never_inline": True},
     )
+
+
+@lru_cache(maxsize=1)
+def sensitivity_step_function() -> ca.Function:
+    """:func:`step_function` with the forward sensitivities of the state to the base
+    wrench (n0, m0) and to a load factor lambda that scales the distributed load
+    (q = lambda q'), as one never-inlined CasADi function.
+
+    Inputs as :func:`step_function`, then S = d state / d (n0, m0, lambda) at s, shape
+    (10, 7), the load rate q' = dq/dlambda (3) [N/m] and the arc length s [m].
+    Outputs: the state at s + h (10) and S there (10, 7). The internal force
+    n(s) = n0 - q s has the sensitivities [I, 0, -q' s] to (n0, m0, lambda). One function
+    for all seven directions shares the nominal arithmetic between them (about half the
+    work of seven separate directional derivatives).
+    """
+    args = _step_symbols()
+    state, force, load = args[0], args[1], args[2]
+    sens = ca.SX.sym("sensitivity", 10, 7)
+    rate = ca.SX.sym("load_rate", 3)
+    position = ca.SX.sym("arc_length")
+    new_state = _rk4_step(*args)
+    force_seed = ca.horzcat(ca.SX.eye(3), ca.SX.zeros(3, 3), -position * rate)
+    load_seed = ca.horzcat(ca.SX.zeros(3, 6), rate)
+    new_sens = (
+        ca.jtimes(new_state, state, sens)
+        + ca.jtimes(new_state, force, force_seed)
+        + ca.jtimes(new_state, load, load_seed)
+    )
+    return ca.Function(
+        "rod_rk4_sensitivity_step",
+        [*args, sens, rate, position],
+        [new_state, new_sens],
+        [*_STEP_NAMES, "sensitivity", "load_rate", "arc_length"],
+        ["next_state", "next_sensitivity"],
+        {"never_inline": True, "cse": True},
+    )
+
+
+def shoot(
+    base_wrench: Any,
+    length: Any,
+    bending_rigidity: Any,
+    distributed_load: Any,
+    steps: int = STEPS,
+    load_rate: Any = None,
+) -> tuple[Any, Any]:
+    """Integrate the clamped rod from its base wrench to the tip (the shooting map).
+
+    base_wrench : (n0, m0), shape (6,). [N, N m]
+    length, bending_rigidity, distributed_load : as :func:`integrate`. [m, N m^2, N/m]
+    load_rate : with it, also the sensitivities: dq/dlambda for a load factor lambda that
+        scales the distributed load, shape (3,). [N/m]
+    Returns the tip state (p (3) [m], Q (4) [-], m(L) (3) [N m]), shape (10,), and, given
+    ``load_rate``, its derivative with respect to (n0, m0, lambda), shape (10, 7) (else
+    None). The tip force is n(L) = n0 - q L exactly.
+    """
+    n0, m0 = base_wrench[0:3], base_wrench[3:6]
+    h = length / steps
+    state = ca.vertcat(ca.SX.zeros(3), 1, 0, 0, 0, m0)
+    if load_rate is None:
+        step = step_function()
+        for k in range(steps):
+            state = step(
+                state, n0 - distributed_load * (k * h), distributed_load, h, bending_rigidity
+            )
+        return state, None
+    sens = ca.SX.zeros(10, 7)
+    sens[7:10, 3:6] = ca.SX.eye(3)
+    step = sensitivity_step_function()
+    for k in range(steps):
+        state, sens = step(
+            state,
+            n0 - distributed_load * (k * h),
+            distributed_load,
+            h,
+            bending_rigidity,
+            sens,
+            load_rate,
+            k * h,
+        )
+    return state, sens
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ LOOP_SAMPLES = 720
 class Workspace:
     """Reachable tip set of one design and its metrics.
 
-    grid : equilibria of the (theta1, theta2) grid, theta1 varying slowest.
+    grid : states of the (theta1, theta2) grid, theta1 varying slowest.
     parallel : equilibria with theta1 = theta2 over [0, 2 pi) (the outer loop).
     antiparallel : equilibria with theta1 = theta2 + pi over [0, 2 pi) (the neutral loop).
     rest_position : shape (3,), unloaded straight tip, base frame. [m]
@@ -65,16 +65,23 @@ class Workspace:
 
     @property
     def reachable(self) -> np.ndarray:
-        """Tip positions of converged, stable grid configurations, shape (M, 3). [m]"""
+        """Tip positions of the grid configurations that have a state, shape (M, 3). [m]"""
         return self.grid.position[self.grid.stable]
 
     @property
-    def n_unconverged(self) -> int:
-        return int(np.count_nonzero(~self.grid.converged))
+    def n_without_state(self) -> int:
+        """Grid configurations without a state (NaN, with a reason in ``grid.failure``)."""
+        return int(np.count_nonzero(~self.grid.stable))
 
     @property
-    def n_unstable(self) -> int:
-        return int(np.count_nonzero(self.grid.converged & ~self.grid.stable))
+    def n_snapped(self) -> int:
+        """Grid configurations whose load ramp ended in a fold (the robot snapped)."""
+        return int(np.count_nonzero(self.grid.snapped))
+
+    @property
+    def n_multistable(self) -> int:
+        """Grid configurations with another stable state at the same command."""
+        return int(np.count_nonzero(self.grid.multistable))
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -157,14 +164,19 @@ def angle_grid(step: float) -> np.ndarray:
 
 
 def sweep_workspace(
-    design: Design, step: float = np.deg2rad(5.0), model: RingPairModel | None = None
+    design: Design,
+    step: float = np.deg2rad(5.0),
+    model: RingPairModel | None = None,
+    multistable: bool = False,
 ) -> Workspace:
-    """Solve the (theta1, theta2) grid with spacing ``step`` [rad] and both loops."""
+    """Solve the (theta1, theta2) grid with spacing ``step`` [rad] and both loops, each
+    configuration's state as :func:`design.equilibrium.solve_equilibria` defines it;
+    ``multistable``: also look for other stable states on the grid."""
     model = model or RingPairModel()
     params = model.parameters(design)
     angles = angle_grid(step)
     t1, t2 = np.meshgrid(angles, angles, indexing="ij")
-    grid = solve_equilibria(model, params, t1.ravel(), t2.ravel())
+    grid = solve_equilibria(model, params, t1.ravel(), t2.ravel(), multistable=multistable)
     loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
     parallel = solve_equilibria(model, params, loop, loop)
     antiparallel = solve_equilibria(model, params, loop + np.pi, loop)

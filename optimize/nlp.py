@@ -42,6 +42,10 @@ from optimize.study import ParetoSweep, Study
 FEASIBILITY_TOLERANCE = 1e-6
 """A constraint row counts as satisfied within this, in its group's file unit, plus this
 relative to its limit (IPOPT relaxes bounds by about 1e-8 relative)."""
+BRANCH_TOLERANCE = 1e-6
+"""An NLP equilibrium is the robot's state when its unknowns are within this of the state
+forward simulation reaches (dimensionless: unknowns over their scale, i.e. 1e-6 of the
+free length or 1e-6 rad; IPOPT's equilibria are exact to about 1e-8 of that scale)."""
 ACTIVE_TOLERANCE = 1e-5
 """A constraint row is active when within this of its limit (file unit) or its multiplier
 is nonzero."""
@@ -117,6 +121,18 @@ def _objective(study: Study, metrics: Mapping[str, float], norms: _Norms) -> flo
         return float(metrics[study.objective[0][0]])
     div = {"disc_radius": norms.disc, "area": norms.area, "reach_ratio": 1.0}
     return float(sum(w * metrics[n] / div[n] for n, w in study.objective))
+
+
+def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Configurations where the NLP's equilibria x (n, K) are not the states the robot
+    reaches (:func:`design.solve_equilibria`: stable, connected to the unloaded robot), and
+    those states (n, K), NaN where there is none."""
+    eq = solve_equilibria(c.model, prm, c.commands[0], c.commands[1])
+    reached = eq.unknowns.T
+    scale = c.model.unknown_scale(prm)[:, None]
+    with np.errstate(invalid="ignore"):
+        differs = ~(np.max(np.abs(reached - x) / scale, axis=0) <= BRANCH_TOLERANCE)
+    return np.flatnonzero(differs), reached
 
 
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
@@ -296,24 +312,33 @@ def _solve_one(
     w0 = np.concatenate([z0, xt0.ravel(order="F"), [0.0, 0.0]])
     lbx = np.concatenate([np.zeros(nf), np.full(n * k_all, -np.inf), [0.0, 0.0]])
     ubx = np.concatenate([np.ones(nf), np.full(n * k_all, np.inf), [np.inf, 1.0]])
-    sol = prob.solver(x0=w0, p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-    stats = prob.solver.stats()
-    w = np.asarray(sol["x"]).ravel()
-    lo, hi = params[len(NAMES) + n : len(NAMES) + n + nf], params[len(NAMES) + n + nf :][:nf]
-    v = lo + (hi - lo) * np.clip(w[:nf], 0.0, 1.0)
     xs = params[len(NAMES) : len(NAMES) + n]
-    x = w[nf : nf + n * k_all].reshape(n, k_all, order="F") * xs[:, None]
+    lo, hi = params[len(NAMES) + n : len(NAMES) + n + nf], params[len(NAMES) + n + nf :][:nf]
     p = params[: len(NAMES)]
+    for attempt in range(2):
+        sol = prob.solver(x0=w0, p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        stats = prob.solver.stats()
+        w = np.asarray(sol["x"]).ravel()
+        v = lo + (hi - lo) * np.clip(w[:nf], 0.0, 1.0)
+        x = w[nf : nf + n * k_all].reshape(n, k_all, order="F") * xs[:, None]
+        prm = np.asarray(c.params(v, p)).ravel()
+        if not np.isfinite(w).all():
+            off = np.arange(k_all)
+            break
+        off, reached = _off_branch(c, prm, x)
+        if attempt or not off.size:
+            break
+        # IPOPT may follow an equilibrium onto another branch than the robot's: start once
+        # more from this design with the states the robot reaches there.
+        reached = np.where(np.isfinite(reached), reached, x)
+        w0 = np.concatenate([w[:nf], (reached / xs[:, None]).ravel(order="F"), w[-2:]])
     g, m, _, _, _ = c.evaluate(v, x, p, norms.deflection)
     g, metrics = np.asarray(g).ravel(), _metrics_dict(m)
     bounds = group_bounds(study, cat, wire, epsilon)
     states = _states(c, g, bounds)
     violation = _violation(states)
-    prm = np.asarray(c.params(v, p)).ravel()
     res = np.asarray(c.model.residual.map(k_all)(x, c.commands, np.tile(prm[:, None], k_all))[0])
     equilibrium = float(np.abs(res / xs[:, None]).max()) if res.size else 0.0
-    minors = np.asarray(c.model.stability.map(k_all)(x, c.commands, np.tile(prm[:, None], k_all)))
-    stable = bool(np.all(minors > 0))
     success = bool(stats.get("success", False))
     message = ""
     if not np.all(np.isfinite(w)):
@@ -323,9 +348,11 @@ def _solve_one(
     elif violation > 0:
         worst = max(states, key=lambda s: -s.margin / s.scale)
         message = f"violates {worst.describe()}"
-    elif study.limits.stable and not stable:
-        bad = np.flatnonzero(~np.all(minors > 0, axis=0))
-        message = f"unstable equilibrium at configurations {bad.tolist()}"
+    elif study.limits.stable and off.size:
+        message = (
+            f"the equilibria at configurations {off.tolist()} are not the states the robot "
+            "reaches there (another branch, or unstable)"
+        )
     accepted = success and not message
     lam_g = np.asarray(sol["lam_g"]).ravel()
     result = StartResult(

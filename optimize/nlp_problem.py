@@ -25,9 +25,11 @@ Formulation (one material combination, one start):
   diameter; clearance of both rings to the external magnet's surface at every
   configuration; the neutral tip deflection within tolerance; optional lower bounds on
   disc radius and reach ratio; epsilon bounds (Pareto) on the catheter diameter, the
-  magnet distance and the magnet volume. Stability of every sampled equilibrium is
-  checked after the solve (the model's ``stability`` minors); an unstable optimum is
-  rejected.
+  magnet distance and the magnet volume. After the solve every sampled equilibrium must
+  be the state the robot reaches there (:func:`design.solve_equilibria`: stable and
+  connected to the unloaded robot by the load ramp); where IPOPT followed another branch,
+  it starts once more from that design with the robot's states, and an optimum still on
+  another branch is rejected (``stable = true``, the default).
 
 SI units are used for all inputs and outputs; file units only in reports.
 """
@@ -43,7 +45,7 @@ import numpy as np
 
 from design import cantilever
 from design.magnets import ring_volume
-from design.model import RingPairModel, Symbols
+from design.model import RingPairModel, Symbols, magnet_clearance
 from design.parameters import NAMES, index
 from optimize.study import DEG, MM, MM3
 
@@ -175,7 +177,6 @@ def core(structure: Structure) -> Core:
     w = gravity if "gravity" in structure.effects else ca.SX.zeros(3)
     stiff = cantilever.stiffness(length, ei)
     w_response = cantilever.distributed_load_response(w, length, ei)
-    ring_radius = ca.sqrt((s["ring_outer_diameter"] / 2) ** 2 + (s["ring_length"] / 2) ** 2)
 
     rows: list[tuple[str, ca.SX]] = []
     deflection = []
@@ -199,14 +200,7 @@ def core(structure: Structure) -> Core:
             twist = -r_twist[4:6]
         rows.append(("twist.wire", twist[0]))
         rows.append(("twist.catheter", twist[1]))
-        for centre in (position, position + s.ring_spacing * frame[:, 0]):
-            offset = centre - s.external_center
-            axial = ca.dot(offset, s.external_axis)
-            radial = ca.sqrt(ca.fmax(ca.sumsqr(offset) - axial**2, 0) + TINY**2)
-            gap = ca.fmax(
-                ca.fabs(axial) - s["external_length"] / 2, radial - s["external_diameter"] / 2
-            )
-            rows.append(("magnet_clearance", gap - ring_radius))
+        rows.append(("magnet_clearance", magnet_clearance(s, position, frame)))
         if k_par <= k < k_par + structure.neutral_configurations:
             rows.append(("neutral", ca.sqrt(ca.sumsqr(deflection[-1]) + TINY**2)))
     wire = s["wire_outer_diameter"]

@@ -159,7 +159,13 @@ def show(design: Path | None, save: Path | None) -> None:
     is_flag=True,
     help="Drive the rings through the configurations in the listed order (theta2 varying "
     "fastest), each state starting from the previous one: needed for hysteresis and to see "
-    "snap-through. Default: each configuration from the straight robot.",
+    "snap-through along a path. Default: each configuration on its own, the state the robot "
+    "reaches when its loads are brought up with the rings held.",
+)
+@click.option(
+    "--no-multistable",
+    is_flag=True,
+    help="Skip the search for other stable states at each command (faster).",
 )
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
 def simulate(
@@ -169,13 +175,18 @@ def simulate(
     out: Path | None,
     effects: str,
     ordered: bool,
+    no_multistable: bool,
     quiet: bool,
 ) -> None:
     """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
 
-    CSV columns: theta1_deg, theta2_deg, x_mm, y_mm, z_mm (tip, base frame), the tip
-    tangent, deflection_mm (from the straight tip), converged, stable. Configurations
-    whose equilibrium did not converge have empty pose cells and converged = false.
+    Each pose is the state the robot reaches: on its own, the stable equilibrium connected
+    to the unloaded robot as the field and gravity are brought up with the rings held; with
+    --ordered, the state reached by driving the listed path. CSV columns: theta1_deg,
+    theta2_deg, the tip ring angles, x_mm, y_mm, z_mm (tip, base frame), the tip tangent,
+    deflection_mm (from the straight tip), converged, stable, snapped (the robot jumped to
+    another branch on the way), multistable (another stable state exists at that command),
+    failure (why a row has no state; its pose cells are then empty and converged = false).
     """
     d = _design(design)
     model = _model(effects)
@@ -185,7 +196,12 @@ def simulate(
     commanded = np.column_stack([g1.ravel(), g2.ravel()])
     with console.status("solving equilibria (the first run on a machine compiles the model)"):
         eq = solve_design(
-            d, np.deg2rad(commanded[:, 0]), np.deg2rad(commanded[:, 1]), model, ordered
+            d,
+            np.deg2rad(commanded[:, 0]),
+            np.deg2rad(commanded[:, 1]),
+            model,
+            ordered,
+            multistable=not (ordered or no_multistable),
         )
     rest = np.array([d.robot.free_length, 0.0, 0.0])
     rows = pose_rows(eq, rest)
@@ -208,7 +224,11 @@ def simulate(
         shown = rows if len(rows) <= 60 else rows[:30] + rows[-30:]
         for row in shown:
             state = (
-                ("stable" if row["stable"] else "UNSTABLE") if row["converged"] else "NOT CONVERGED"
+                ", ".join(
+                    ["stable"] + ["snapped"] * row["snapped"] + ["multistable"] * row["multistable"]
+                )
+                if row["stable"]
+                else "NO STATE"
             )
             table.add_row(
                 *(
@@ -222,7 +242,10 @@ def simulate(
             console.print(f"({len(rows) - 60} rows not shown)")
     n_bad = int(np.count_nonzero(~eq.converged))
     if n_bad:
-        err_console.print(f"[yellow]warning:[/] {n_bad} configuration(s) did not converge")
+        reasons = sorted(set(eq.failure[~eq.converged]))
+        err_console.print(
+            f"[yellow]warning:[/] {n_bad} configuration(s) have no state: " + "; ".join(reasons)
+        )
     console.print(f"wrote {out} ({len(rows)} configurations)")
 
 
@@ -258,7 +281,7 @@ def workspace(design: Path | None, out: Path | None, step: float, effects: str) 
     from ringpair.plots import write_workspace_plots  # matplotlib only when plotting
 
     with console.status("sweeping the workspace"):
-        ws = sweep_workspace(d, np.deg2rad(step), model)
+        ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
     rest = ws.rest_position
@@ -285,8 +308,9 @@ def workspace_summary(ws: Workspace, design: Design, step_deg: float, model: str
         "model": model,
         "grid_step_deg": step_deg,
         "configurations": len(ws.grid),
-        "unconverged": ws.n_unconverged,
-        "unstable": ws.n_unstable,
+        "without_state": ws.n_without_state,
+        "snapped": ws.n_snapped,
+        "multistable": ws.n_multistable,
         "free_length_mm": design.robot.free_length * 1e3,
         "y_range_mm": [v * 1e3 for v in ws.y_range],
         "z_range_mm": [v * 1e3 for v in ws.z_range],
@@ -306,8 +330,8 @@ def _print_summary(s: dict) -> None:
     table.add_column("metric")
     table.add_column("value", justify="right")
     table.add_row(
-        "configurations (unconverged / unstable)",
-        f"{s['configurations']} ({s['unconverged']} / {s['unstable']})",
+        "configurations (without a state / snapped / multistable)",
+        f"{s['configurations']} ({s['without_state']} / {s['snapped']} / {s['multistable']})",
     )
     table.add_row("deflection range along y", "{:.2f} .. {:.2f} mm".format(*s["y_range_mm"]))
     table.add_row("deflection range along z", "{:.2f} .. {:.2f} mm".format(*s["z_range_mm"]))
@@ -369,7 +393,7 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
                     "max_deflection_mm": float(
                         np.max(np.linalg.norm(eq.position - rest, axis=1)) * 1e3
                     ),
-                    "unstable": int(np.count_nonzero(~eq.stable)),
+                    "without_state": int(np.count_nonzero(~eq.stable)),
                     "snaps": int(np.count_nonzero(eq.snapped)),
                 }
             )
@@ -383,7 +407,7 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
         "max shift (mm)",
         "RMS shift (mm)",
         "largest deflection (mm)",
-        "unstable",
+        "no state",
         "snaps",
     ):
         table.add_column(col, justify="right")
@@ -393,7 +417,7 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
             f"{r['max_shift_mm']:.2f}",
             f"{r['rms_shift_mm']:.2f}",
             f"{r['max_deflection_mm']:.2f}",
-            str(r["unstable"]),
+            str(r["without_state"]),
             str(r["snaps"]),
         )
     console.print(table)

@@ -26,12 +26,14 @@ POSE_COLUMNS = (
     "converged",
     "stable",
     "snapped",
+    "multistable",
+    "failure",
 )
 
 
 def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
     """One row per configuration: commanded and tip ring angles [deg], tip [mm], tangent,
-    deflection from ``rest`` [mm], flags."""
+    deflection from ``rest`` [mm], flags, and why a row has no state (empty pose cells)."""
     rows = []
     commanded_deg = np.rad2deg(eq.command)
     tip_deg = np.rad2deg(eq.tip_angles)
@@ -54,6 +56,8 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
                 "converged": bool(eq.converged[k]),
                 "stable": bool(eq.stable[k]),
                 "snapped": bool(eq.snapped[k]),
+                "multistable": bool(eq.multistable[k]),
+                "failure": str(eq.failure[k]),
             }
         )
     return rows

@@ -15,7 +15,7 @@ def test_axisymmetric_setup_gives_a_round_workspace(demonstrator):
     # Magnet on the robot's axis, magnetised along it: rotating both rings together rotates
     # the tip about x, so the workspace is a disc and its metrics coincide.
     ws = sweep_workspace(demonstrator, np.deg2rad(10))
-    assert ws.n_unconverged == 0 and ws.n_unstable == 0
+    assert ws.n_without_state == 0 and ws.n_snapped == 0
     assert ws.y_range[0] == pytest.approx(-ws.y_range[1], rel=1e-9)
     assert ws.z_range == pytest.approx(ws.y_range, rel=1e-9)
     # The loop is a polygon of LOOP_SAMPLES chords: 1 - cos(pi / 720) = 9.5e-6 below.

@@ -178,7 +178,7 @@ def test_optimum_rechecked_by_forward_simulation_of_its_design_file(tmp_path):
 
     # Objective: the workspace's disc radius (720 loop samples, segment distances).
     ws = sweep_workspace(design, np.deg2rad(15.0))
-    assert ws.n_unconverged == 0 and ws.n_unstable == 0
+    assert ws.n_without_state == 0 and ws.n_snapped == 0
     assert ws.parallel.stable.all()
     assert ws.disc_radius == pytest.approx(result.objective, rel=1e-4)
     assert ws.disc_radius > 1.05 * sweep_workspace(study.base, np.deg2rad(15.0)).disc_radius
@@ -312,7 +312,7 @@ def test_torsion_study_optimum_holds_in_forward_simulation():
     assert result.feasible, result.report()
     model = RingPairModel(study.effects)
     ws = sweep_workspace(result.design, np.deg2rad(15.0), model=model)
-    assert ws.n_unconverged == 0 and ws.n_unstable == 0
+    assert ws.n_without_state == 0 and ws.n_snapped == 0
     assert ws.disc_radius == pytest.approx(result.objective, rel=1e-4)
     phi = np.deg2rad(np.arange(0.0, 360.0, 15.0))
     for t1 in (phi, phi + np.pi / 2, phi + np.pi):
