@@ -65,6 +65,11 @@ MIN_LOAD_STEP = 2.0**-12
 CONTRACTION = 0.25
 """A ramp step is accepted only if each Newton correction is at most this fraction of the
 one before (Deuflhard's contraction test: the corrector stays in the predictor's basin)."""
+CORRECTION_RATIO = 0.5
+MIN_CORRECTION = 0.01
+"""...and if its first correction is at most CORRECTION_RATIO of the change the predictor
+made, or MIN_CORRECTION (dimensionless): a corrector that lands far from the prediction
+may have found another branch."""
 MAX_CORRECTIONS = 8
 """Newton corrections per ramp step before the step is refused."""
 TARGET_CONTRACTION = CONTRACTION / 2
@@ -528,6 +533,7 @@ def _ramp(
     corrections = np.zeros(n_cols, int)
     last = np.full(n_cols, np.inf)
     contraction = np.zeros(n_cols)  # the corrector's first contraction in this step
+    predicted = np.zeros(n_cols)  # the predictor's change of state in this step
     phase = np.full(n_cols, _RUN)
     falls = np.zeros(n_cols, int)
     refused = np.zeros(n_cols, bool)  # the current step was refused before
@@ -553,6 +559,7 @@ def _ramp(
             c = cols[curved]
             bend = (tangent[:, c] - tangent_prev[:, c]) / (lam[c] - lam_prev[c])
             xs[:, c] += 0.5 * step[:, curved] ** 2 * bend
+        predicted[cols] = _norm(xs[:, cols] - x[:, cols], scale[:, cols])
         corrections[cols] = 0
         last[cols] = np.inf
         contraction[cols] = 0.0
@@ -600,7 +607,10 @@ def _ramp(
         candidate = conv | small
         moved = np.isfinite(sn)  # every finite step is taken, a candidate's last one too
         xs[:, a[moved]] -= step[:, moved]
-        contracting = (corrections[a] == 0) | (sn <= CONTRACTION * last[a])
+        # The corrector must stay near the prediction (its first correction at most
+        # CORRECTION_RATIO of the predicted change, or MIN_CORRECTION), and contract.
+        near = np.maximum(CORRECTION_RATIO * predicted[a], MIN_CORRECTION)
+        contracting = np.where(corrections[a] == 0, sn <= near, sn <= CONTRACTION * last[a])
         give_up = ~candidate & (
             ~np.isfinite(sn) | ~contracting | (corrections[a] >= MAX_CORRECTIONS)
         )

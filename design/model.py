@@ -35,6 +35,7 @@ import casadi as ca
 import numpy as np
 
 from design import cantilever, rod
+from design.cylinder_field import cylinder_field
 from design.dipole import dipole_field, dipole_field_gradient
 from design.geometry import cylinder_distance, ring_radius
 from design.magnets import cylinder_moment, ring_moment, ring_volume
@@ -352,7 +353,7 @@ class RingPairModel:
                 ca.jacobian(loads, a_sym),
                 ca.jacobian(loads, load),
             ],
-            {"cse": True},
+            {"cse": True, "never_inline": True},  # one copy in the compiled code of all uses
         )
         twist_rows = None if twist is None else ca.diag(twist)
 
@@ -412,8 +413,6 @@ class RingPairModel:
         def field_model(p: ca.SX) -> tuple[ca.SX, ca.SX]:
             offset = p - s.external_center
             if near:
-                from design.cylinder_field import cylinder_field
-
                 return cylinder_field(
                     offset,
                     s.external_axis,

@@ -64,6 +64,11 @@ BIC_DROP = 10.0
 strong evidence)."""
 CV_GAIN = 0.03
 """... and its cross-validated RMSE falls by more than this fraction."""
+NESTED_START = {"wire_torsion_scale": 10.0, "catheter_torsion_scale": 10.0}
+"""A candidate is also started where it all but reduces to the current model (here:
+transmissions 10 times stiffer than nominal, nearly rigid, the baseline's assumption; the
+nominal value can lie beyond a snap-through of the rings from the data's branch, where
+a local fit cannot come back from)."""
 SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 """Factors on each positive (log-fitted) parameter, alone and with the others of its
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
@@ -302,12 +307,13 @@ def _fit(
     k: int,
     seed: int,
     cv: bool,
-    starts: Sequence[CalibrationResult | None],
+    starts: Sequence[CalibrationResult | Mapping[str, float] | None],
     sigma: float | None,
     max_nfev: int | None = None,
 ) -> Fit:
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
-    estimates), keep the best, and cross-validate it if ``cv``."""
+    estimates; a mapping: these values, the others nominal), keep the best, and
+    cross-validate it if ``cv``."""
     free = default_free(effects)
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
@@ -335,12 +341,16 @@ def _fit(
     # (the fast fit can run into a region where it no longer does, e.g. a stiff rod).
     fits: list[Fitted] = []
     for s in starts:
-        initial = None if s is None else {n: v for n, v in s.estimate.items() if n in free}
+        values = {} if s is None else s if isinstance(s, Mapping) else s.estimate
+        initial = {n: v for n, v in values.items() if n in free} or None
         cal, path = fit(initial, mode)
         if path_matters(cal.params):
             cal, path = fit({n: cal.estimate[n] for n in free}, "driven")
         fits.append((cal, path))
-        if path_matters(model.parameters(design) if s is None else s.params):
+        start_params = model.parameters(design)
+        for n, v in (initial or {}).items():
+            start_params[index(n)] = v
+        if path_matters(start_params):
             fits.append(fit(initial, "driven"))
     cal, path = min(fits, key=lambda f: f[0].chi2 if f[0].unconverged == 0 else math.inf)
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
@@ -509,7 +519,12 @@ def diagnose(
             # Screening: a short fit from the current estimates (and, in the first round,
             # from the nominal design: the baseline may have bent its parameters to mimic
             # the effect). The candidate that is taken on is refitted in full.
-            starts = [current.calibration] + ([None] if not current.effects else [])
+            starts: list[CalibrationResult | Mapping[str, float] | None] = [current.calibration]
+            if not current.effects:
+                starts.append(None)
+            nested = {n: NESTED_START[n] for n in EFFECT_FREE[name] if n in NESTED_START}
+            if nested:  # the candidate as it reduces to the current model
+                starts.append({**current.calibration.estimate, **nested})
             f = _fit(
                 design,
                 m,

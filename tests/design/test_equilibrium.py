@@ -34,10 +34,12 @@ def uniform_field_params(b: float, direction: str) -> np.ndarray:
     away that its field at the tip is uniform, B = b along +x or along -y."""
     params = MODEL.parameters(DEMO)
     moment = b * FAR**3 / (2 * K_DIPOLE)  # on a dipole's axis B = 2 k m / r^3
-    size = (moment * MU0 * 4 / np.pi) ** (1 / 3)  # a cylinder with B_r = 1 T, D = length
+    # A cylinder with D = length = FAR / 10 (far clear of the robot) has this moment at
+    # remanence B_r = moment mu0 / volume.
+    size = FAR / 10
     values = {
         "ring_gap": -DEMO.tip.magnet_length,  # centre spacing 0
-        "external_remanence": 1.0,
+        "external_remanence": moment * MU0 / (np.pi / 4 * size**3),
         "external_diameter": size,
         "external_length": size,
     }
