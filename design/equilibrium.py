@@ -103,8 +103,9 @@ POLISH_ATTEMPTS = 3
 """Newton polishes of one fall that may fail to reach a stable state before it is given
 up."""
 POLISH_BELOW = 1e-3
-"""A falling state is polished by Newton once it is stable in every mode and its step is
-below this (dimensionless). [-]"""
+POLISH_GRADIENT = 1e-3
+"""A falling state is polished by Newton once its step or its energy gradient is below
+these (dimensionless). [-]"""
 DISTINCT = 1e-6
 """Two states differ when their unknowns differ by more than this, dimensionless. [-]"""
 SUBSTEP = np.deg2rad(1.0)
@@ -128,6 +129,7 @@ FAILURES = {
     "diverged": "the solver diverged (the tip pulled into the external magnet?)",
     "stalled": f"Newton's residual stalls above the tolerance ({TOLERANCE:g} m or rad)",
     "contact": "the rings touch the external magnet (contact is not modelled)",
+    "pulled": "the robot is pulled into contact with the external magnet (contact is not modelled)",
 }
 
 
@@ -174,10 +176,10 @@ class Equilibria:
 class _Kernels:
     """The compiled functions of one model that the solver calls, the loads scaled by the
     load factor lambda: ``newton`` (x, command, lambda, params) -> (r, Newton step,
-    dx/dlambda, monitor), ``relaxation`` and ``modes`` as
+    dx/dlambda, monitor, clearance), ``relaxation`` and ``descent`` as
     :class:`design.model.RingPairModel`'s;
-    ``check`` (x, command, params) -> (r, exact monitor, position, frame (9,
-    column-major), tip angles, clearance to the external magnet) at full load."""
+    ``check`` (x, command, lambda, params) -> (r, exact monitor, position, frame (9,
+    column-major), tip angles, clearance to the external magnet)."""
 
     def __init__(self, model: RingPairModel) -> None:
         self.model = model
@@ -187,26 +189,26 @@ class _Kernels:
         prm = ca.SX.sym("params", model.residual.size1_in(2))
         load = index("load_scale")
         scaled = ca.vertcat(prm[:load], prm[load] * lam, prm[load + 1 :])
-        r_lam, step, load_tangent, monitor_lam = model.newton.call([x, command, scaled])
+        r_lam, step, load_tangent, monitor_lam, clearance = model.newton.call([x, command, scaled])
         newton = ca.Function(
             "newton",
             [x, command, lam, prm],
-            [r_lam, step, load_tangent * prm[load], monitor_lam],  # dx / dlambda
+            [r_lam, step, load_tangent * prm[load], monitor_lam, clearance],  # dx / dlambda
         )
-        relaxation, modes = (
+        relaxation, descent = (
             ca.Function(
                 name, [x, command, lam, prm], getattr(model, name).call([x, command, scaled])
             )
-            for name in ("relaxation", "modes")
+            for name in ("relaxation", "descent")
         )
-        r, monitor, position, frame, angles, clearance = model.check.call([x, command, prm])
+        r, monitor, position, frame, angles, clearance = model.check.call([x, command, scaled])
         check = ca.Function(
             "check",
-            [x, command, prm],
+            [x, command, lam, prm],
             [r, monitor, position, ca.reshape(frame, 9, 1), angles, clearance],
         )
-        compiled = compile_functions([newton, relaxation, modes, check])
-        self.newton, self.relaxation, self.modes, self.check = compiled
+        compiled = compile_functions([newton, relaxation, descent, check])
+        self.newton, self.relaxation, self.descent, self.check = compiled
         self._maps: dict[tuple[str, int], ca.Function] = {}
         self._lock = threading.Lock()
 
@@ -251,33 +253,41 @@ def kernels(model: RingPairModel) -> _Kernels:
 
 
 def _matrices(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
-    """The monitor matrices M (column-major rows of ``monitor``) as (N, n, n), transposed
-    (which changes neither determinant nor eigenvalues)."""
+    """The column-major matrices stacked in each column of ``monitor`` as (N, k, n, n),
+    transposed (which changes neither determinant nor eigenvalues)."""
     n = model.n_unknowns
-    return monitor.T.reshape(-1, n, n)
+    return monitor.T.reshape(monitor.shape[1], monitor.shape[0] // (n * n), n, n)
 
 
 def _fold_free(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
-    """Whether each column's monitor is on the stable side of every fold seen from rest:
-    all Sylvester minors positive (linear rod), det M > 0 (large-deflection rod)."""
+    """Whether each column's Newton monitor is on the stable side of every fold seen
+    from rest: all Sylvester minors positive (linear rod), det dr/dx > 0 (large-deflection
+    rod: along a branch followed continuously from rest, where it is the elastic
+    stiffness, the lowest eigenvalue of the second variation can only reach zero where
+    dr/dx is singular)."""
     if model.linear_rod:
         return np.all(monitor > 0, axis=0)
     with np.errstate(invalid="ignore"):
-        return np.linalg.det(_matrices(model, monitor)) > 0
+        return np.linalg.det(_matrices(model, monitor)[:, 0]) > 0
 
 
 def _stable(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
-    """Exact stability of each column from the ``check`` monitor: all Sylvester minors
-    positive (linear rod) or all eigenvalues of M with positive real parts (large
-    deflection; eigenvalues of a compliance-weighted Hessian, real for these conservative
-    loads)."""
+    """Exact stability of each column from the ``check`` monitor, wherever the state came
+    from: all Sylvester minors positive (linear rod; the Hessian of the total potential),
+    or for the large-deflection rod det J(s_k) > 0 at every node and, with torsion, J(0)'s
+    angle block with eigenvalues of positive real part (Jacobi's condition on nested
+    variations, :class:`design.model.RingPairModel`)."""
     if model.linear_rod:
         return np.all(monitor > 0, axis=0)
     m = _matrices(model, monitor)
-    ok = np.isfinite(m).all(axis=(1, 2))
+    ok = np.isfinite(m).all(axis=(1, 2, 3))
     out = np.zeros(len(m), bool)
     if ok.any():
-        out[ok] = (np.linalg.eigvals(m[ok]).real > 0).all(axis=1)
+        good = (np.linalg.det(m[ok]) > 0).all(axis=1)
+        if model.n_unknowns > model.n_rod:
+            angles = m[ok][:, 0, model.n_rod :, model.n_rod :]
+            good &= (np.linalg.eigvals(angles).real > 0).all(axis=1)
+        out[ok] = good
     return out
 
 
@@ -328,12 +338,18 @@ class _Checks:
 
 
 def _check(
-    model: RingPairModel, params: np.ndarray, command: np.ndarray, x: np.ndarray
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    lam: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """The exact check of states at full load: (converged, stable, check outputs)."""
-    outs = kernels(model).run("check", [x, command], params)
+    """The exact check of states at load factors lam (default full load): (converged to
+    TOLERANCE, stable, check outputs)."""
+    lam = np.ones(x.shape[1]) if lam is None else lam
+    outs = kernels(model).run("check", [x, command, lam[None, :]], params)
     converged = np.max(np.abs(outs[0]), axis=0) < TOLERANCE
-    return converged, converged & _stable(model, outs[1]), outs
+    return converged, _stable(model, outs[1]), outs
 
 
 def _judge(
@@ -343,23 +359,32 @@ def _judge(
     x: np.ndarray,
     lam: np.ndarray,
     monitor: np.ndarray,
+    clearance: np.ndarray,
     checks: _Checks,
     where: np.ndarray,
+    exact: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Judge candidate states x (n, m) at load factors lam, given the solver's monitor at
-    (or within a last Newton step of) each: (converged, acceptable). At full load the
-    exact check decides (its outputs are put in ``checks`` at columns ``where``); below it
-    a candidate is converged by construction and the monitor must show no fold crossed."""
+    """Judge candidate states x (n, m) at load factors lam, given the solver's monitor and
+    clearance at (or within a last Newton step of) each: (converged, acceptable). At full
+    load, or anywhere if ``exact`` (states not reached along a branch from rest), the
+    exact check decides (full-load outputs are put in ``checks`` at columns ``where``);
+    below full load a candidate is converged by construction and, along a branch, the
+    monitor must show no fold crossed. A state whose rings are inside the external magnet
+    is never acceptable."""
     converged = np.ones(lam.size, bool)
     ok = np.zeros(lam.size, bool)
     full = lam >= 1.0
-    if full.any():
-        converged[full], ok[full], outs = _check(
-            model, _columns(params, full), command[:, full], x[:, full]
+    test = full | exact
+    if test.any():
+        done, ok[test], outs = _check(
+            model, _columns(params, test), command[:, test], x[:, test], lam[test]
         )
-        checks.put(where[full], outs)
-    ok[~full] = _fold_free(model, monitor[:, ~full])
-    return converged, ok
+        converged[full] = done[full[test]]
+        ok[full] &= converged[full]
+        at_full = full[test]
+        checks.put(where[full], [o[:, at_full] for o in outs])
+    ok[~test] = _fold_free(model, monitor[:, ~test])
+    return converged, ok & (clearance.ravel() >= 0)
 
 
 def _newton(
@@ -371,10 +396,11 @@ def _newton(
     checks: _Checks,
     where: np.ndarray,
     iterations: int = 2 * MAX_CORRECTIONS,
+    exact: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Newton from x at load factors lam (no contraction required): (states, converged,
-    acceptable as :func:`_judge` judges; checks of full-load states go to ``checks`` at
-    columns ``where``)."""
+    acceptable as :func:`_judge` judges, ``exact`` passed on; checks of full-load states
+    go to ``checks`` at columns ``where``)."""
     kern = kernels(model)
     xs = x.copy()
     ok = np.zeros(lam.size, bool)
@@ -384,7 +410,7 @@ def _newton(
         a = np.flatnonzero(running)
         if a.size == 0:
             break
-        r, step, _, monitor = kern.run(
+        r, step, _, monitor, clearance = kern.run(
             "newton", [xs[:, a], command[:, a], lam[None, a]], _columns(params, a)
         )
         rn, sn = np.max(np.abs(r), axis=0), np.max(np.abs(step), axis=0)
@@ -401,8 +427,10 @@ def _newton(
                 xs[:, c],
                 lam[c],
                 monitor[:, candidate],
+                clearance[:, candidate],
                 checks,
                 where[c],
+                exact,
             )
             ok[c], done[c] = good, converged
             running[c[converged]] = False
@@ -417,20 +445,23 @@ def _fall(
     lam: np.ndarray,
     checks: _Checks,
     where: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The stable states the robot falls into from x at load factors lam (a fold, or an
     unstable equilibrium).
 
-    The robot goes down its potential. In the modes of M = K^-1 dr/dx (eigenvectors v,
-    eigenvalues mu: the stiffness of each mode relative to the elastic one) the downhill
-    direction -K^-1 r has components -a; each mode moves by -a / |mu| (with |mu| at least
+    The robot goes down its total potential energy. In the modes of the energy's Hessian H
+    in the unknowns (:class:`design.model.RingPairModel` ``descent``, dimensionless:
+    eigenvectors v, eigenvalues mu, the stiffness of each mode relative to the elastic one)
+    the gradient g has components a; each mode moves by -a / |mu| (with |mu| at least
     MODE_FLOOR): Newton's step in the stable modes, and in an unstable mode the same
     distance downhill instead of up to the saddle ("saddle-free Newton": Dauphin et al.,
     NeurIPS 2014), the whole step at most TRUST long. It starts kicked by KICK both ways
     along the softest mode, so that a symmetric bifurcation is left too, and is polished by
-    Newton once every mode is stable and the step is below POLISH_BELOW (a polish that
-    lands elsewhere than on a stable state sends the column on). Of the two ways the stable
-    state nearer x is taken (the first on a tie). Returns (states, found)."""
+    Newton once its step or gradient is small, the polished state judged by the exact
+    check (a polish that lands on an unstable equilibrium kicks the column off again). A
+    way on which the rings reach the external magnet ends there (contact, which is not
+    modelled). Of the two ways the stable state nearer x is taken (the first on a tie).
+    Returns (states, found, touched: no state found and the fall reached the magnet)."""
     kern = kernels(model)
     n, m = x.shape
     both = np.concatenate([np.arange(m), np.arange(m)])
@@ -439,6 +470,7 @@ def _fall(
     xs = np.concatenate([x, x], axis=1)
     sign = np.concatenate([np.ones(m), -np.ones(m)])
     found = np.zeros(2 * m, bool)
+    touched = np.zeros(2 * m, bool)
     alive = np.isfinite(xs).all(axis=0)
     kicked = np.zeros(2 * m, bool)
     polishes = np.zeros(2 * m, int)
@@ -447,30 +479,37 @@ def _fall(
         a = np.flatnonzero(alive & ~found)
         if a.size == 0:
             break
-        direction, modes = kern.run("modes", [xs[:, a], c2[:, a], lam2[None, a]], _columns(p2, a))
-        matrices = modes.T.reshape(-1, n, n).transpose(0, 2, 1)
-        good = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(direction).all(axis=0)
+        gradient, hessian, clearance = kern.run(
+            "descent", [xs[:, a], c2[:, a], lam2[None, a]], _columns(p2, a)
+        )
+        matrices = hessian.T.reshape(-1, n, n)
+        inside = ~(clearance[0] >= 0)
+        touched[a[inside]] = True
+        good = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(gradient).all(axis=0)
+        good &= ~inside
         alive[a[~good]] = False
-        a, direction, matrices = a[good], direction[:, good], matrices[good]
+        a, gradient, matrices = a[good], gradient[:, good], matrices[good]
         if a.size == 0:
             continue
-        values, vectors = np.linalg.eig(matrices)
+        # (H is symmetric at equilibria; its symmetric part elsewhere)
+        values, vectors = np.linalg.eigh(0.5 * (matrices + matrices.transpose(0, 2, 1)))
         fresh = ~kicked[a]
         if fresh.any():  # leave along the softest mode, both ways
-            soft = vectors[np.flatnonzero(fresh), :, np.argmin(values.real[fresh], axis=1)].real
-            relative = soft.T / scale[:, a[fresh]]
+            soft = vectors[np.flatnonzero(fresh), :, 0].T  # (eigh sorts ascending)
             # (a mode's sign is arbitrary: its largest component counts positive)
-            lead = relative[np.argmax(np.abs(relative), axis=0), np.arange(relative.shape[1])]
+            lead = soft[np.argmax(np.abs(soft), axis=0), np.arange(soft.shape[1])]
             kick = KICK * np.sign(lead) / np.where(lead != 0, np.abs(lead), 1.0)
-            xs[:, a[fresh]] += sign[a[fresh]] * kick * soft.T
+            xs[:, a[fresh]] += sign[a[fresh]] * kick * soft * scale[:, a[fresh]]
             kicked[a[fresh]] = True
-        components = np.linalg.solve(vectors, direction.T[:, :, None].astype(complex))[:, :, 0]
-        magnitude = np.maximum(np.abs(values.real), MODE_FLOOR)
-        step = np.einsum("kij,kj->ki", vectors, components / magnitude).real.T
-        size = _norm(step, scale[:, a])
+        components = np.einsum("kji,jk->ki", vectors, gradient)
+        magnitude = np.maximum(np.abs(values), MODE_FLOOR)
+        step = np.einsum("kij,kj->ik", vectors, components / magnitude)
+        size = np.max(np.abs(step), axis=0)
         step *= np.minimum(1.0, TRUST / np.maximum(size, 1e-300))
-        xs[:, a] -= step
-        ready = a[(values.real > 0).all(axis=1) & (size < POLISH_BELOW)]
+        xs[:, a] -= step * scale[:, a]
+        # (near a straight rod the axial force and moment are constraint-like: the energy
+        # hardly depends on them, and the descent's steps along them need not shrink)
+        ready = a[(size < POLISH_BELOW) | (np.max(np.abs(gradient), axis=0) < POLISH_GRADIENT)]
         if ready.size:
             polished, _, ok = _newton(
                 model,
@@ -480,10 +519,12 @@ def _fall(
                 lam2[ready],
                 scratch,
                 ready,
+                exact=True,
             )
             xs[:, ready[ok]] = polished[:, ok]
             found[ready[ok]] = True
             polishes[ready[~ok]] += 1
+            kicked[ready[~ok]] = False  # near an unstable equilibrium: leave it again
             alive[ready[polishes[ready] > POLISH_ATTEMPTS]] = False
     distance = np.where(found, _norm(xs - x[:, both], scale), np.inf)
     second = distance[m:] < distance[:m]
@@ -491,7 +532,8 @@ def _fall(
     if scratch.outs is not None:
         full = found[pick] & scratch.done[pick]
         checks.put(where[full], [o[:, pick[full]] for o in scratch.outs])
-    return xs[:, pick], found[pick]
+    contact = ~found[pick] & (touched[:m] | touched[m:])
+    return xs[:, pick], found[pick], contact
 
 
 # -------------------------------------------------------------------------- the load ramp
@@ -567,16 +609,19 @@ def _ramp(
     def fall(f: np.ndarray) -> None:
         """Columns f end in a fold at lam: they fall, a little further loaded."""
         lam_fall = np.minimum(lam[f] + np.maximum(SETTLE_OVERSHOOT, h[f]), 1.0)
-        fallen, found = _fall(
+        fallen, found, contact = _fall(
             model, _columns(params, f), command[:, f], x[:, f], lam_fall, checks, f
         )
         ok, lost = f[found], f[~found]
         phase[lost] = _FAIL
-        failure[lost] = FAILURES["fold"]
+        failure[lost] = np.where(contact[~found], FAILURES["pulled"], FAILURES["fold"])
         x[:, ok] = fallen[:, found]
         lam[ok] = lam_fall[found]
         lam_prev[ok] = -1.0
-        tangent[:, ok] = 0.0  # unknown after a fall: the next predictor is the state itself
+        if ok.size:  # the branch's tangent at the state fallen into: the next predictor
+            tangent[:, ok] = kern.run(
+                "newton", [x[:, ok], command[:, ok], lam[None, ok]], _columns(params, ok)
+            )[2]
         falls[ok] += 1
         h[ok] = RESTART_STEP
         phase[ok[lam[ok] >= 1.0]] = _DONE
@@ -596,7 +641,7 @@ def _ramp(
                 break
             fall(f)
             continue
-        r, step, load_tangent, monitor = kern.run(
+        r, step, load_tangent, monitor, clearance = kern.run(
             "newton", [xs[:, a], command[:, a], target[None, a]], _columns(params, a)
         )
         tangent_xs[:, a] = load_tangent
@@ -625,6 +670,7 @@ def _ramp(
                 xs[:, cand],
                 target[cand],
                 monitor[:, candidate],
+                clearance[:, candidate],
                 checks,
                 cand,
             )
@@ -649,7 +695,14 @@ def _ramp(
         ref = a[refuse & (phase[a] == _RUN)]
         refused[ref] = True
         with np.errstate(invalid="ignore", divide="ignore"):
-            theta = np.where(np.isfinite(sn) & np.isfinite(last[a]), sn / last[a], np.inf)
+            # Newton's contraction; for a first correction that missed the prediction, how
+            # far it missed (the predictor's error grows with the step's square).
+            theta = np.where(
+                corrections[a] == 0,
+                TARGET_CONTRACTION * sn / near,
+                np.where(np.isfinite(last[a]), sn / last[a], np.inf),
+            )
+            theta = np.where(np.isfinite(theta), theta, np.inf)
         factor = np.sqrt(TARGET_CONTRACTION / np.maximum(theta[refuse & (phase[a] == _RUN)], 1e-12))
         h[ref] *= np.clip(factor, 1 / SHRINK, 0.5)
         phase[ref[h[ref] < MIN_LOAD_STEP]] = _FOLD
@@ -691,7 +744,7 @@ def _finish(
     stable = reached & (np.max(np.abs(outs[0]), axis=0) < TOLERANCE) & _stable(model, outs[1])
     fall = np.flatnonzero(reached & ~stable)
     if fall.size:
-        fallen, found = _fall(
+        fallen, found, contact = _fall(
             model,
             _columns(params, fall),
             command[:, fall],
@@ -703,7 +756,7 @@ def _finish(
         x[:, fall] = np.where(found, fallen, np.nan)
         snapped[fall[found]] = True
         stable[fall] = found
-        failure[fall[~found]] = FAILURES["unstable"]
+        failure[fall[~found]] = np.where(contact[~found], FAILURES["pulled"], FAILURES["unstable"])
     failure[~stable & (failure == "")] = FAILURES["diverged"]
     touching = stable & ~(outs[5][0] >= 0)
     stable &= ~touching
@@ -769,7 +822,7 @@ def _other_stable_states(
         states, converged, good = _newton(model, p, c, start[:, todo], ones, scratch, local)
         unstable = np.flatnonzero(converged & ~good)
         if unstable.size:
-            fallen, ok = _fall(
+            fallen, ok, _ = _fall(
                 model,
                 _columns(p, unstable),
                 c[:, unstable],
@@ -830,7 +883,8 @@ def stable_states(
 
     unknowns : shape (n, N). command : shape (2, N). [SI]
     """
-    return _check(model, np.asarray(params, float), command, unknowns)[1]
+    converged, stable, _ = _check(model, np.asarray(params, float), command, unknowns)
+    return converged & stable
 
 
 # -------------------------------------------------------------------------- driven paths
@@ -875,23 +929,27 @@ def solve_sequence(
         """Newton from x0 at the command c; (state, converged on the stable side)."""
         x, last = x0.copy(), np.inf
         for k in range(MAX_CORRECTIONS + 2):
-            r, step, _, monitor = newton_eval.flat(x, c, 1.0, params)
+            r, step, _, monitor, clearance = newton_eval.flat(x, c, 1.0, params)
             size = float(np.max(np.abs(step) / scale))
             if not np.isfinite(size) or (k > 0 and size > CONTRACTION * last):
                 return x, False
             if np.max(np.abs(step)) < step_tolerance or np.max(np.abs(r)) < TOLERANCE:
-                return x - step, bool(_fold_free(model, monitor[:, None])[0])
+                ok = _fold_free(model, monitor[:, None])[0] and clearance[0] >= 0
+                return x - step, bool(ok)
             x, last = x - step, size
         return x, False
 
     def lags(x: np.ndarray, c: np.ndarray) -> np.ndarray:
         return x[n_rod:] - c if torsion else np.zeros(2)
 
-    def fall(x: np.ndarray, c: np.ndarray) -> np.ndarray:
-        fallen, found = _fall(
+    def fall(x: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, str]:
+        """The state the robot falls into from x at c, or NaN and why not."""
+        fallen, found, contact = _fall(
             model, params, c[:, None], x[:, None], np.ones(1), _Checks(1), np.arange(1)
         )
-        return fallen[:, 0] if found[0] else np.full_like(x, np.nan)
+        if found[0]:
+            return fallen[:, 0], ""
+        return np.full_like(x, np.nan), FAILURES["pulled" if contact[0] else "unstable"]
 
     def alone(c: np.ndarray) -> tuple[np.ndarray, bool, str]:
         """The state at c as a configuration on its own: (state or NaN, snapped, failure)."""
@@ -924,10 +982,10 @@ def solve_sequence(
                 continue
             if not ok:
                 snapped[k] = True
-                out = fall(out if np.isfinite(out).all() else prev, c)
-                if not np.isfinite(out).all():
+                out, why = fall(out if np.isfinite(out).all() else prev, c)
+                if why:
                     prev = out
-                    failure[k] = FAILURES["unstable"]
+                    failure[k] = why
                     break
                 jump = float(np.abs(lags(out, c) - lag).max())
             if jump > SNAP_LAG_JUMP:

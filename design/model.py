@@ -122,6 +122,13 @@ class Symbols(dict):
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
 
 
+def _rotation_rates(quaternion: ca.SX) -> ca.SX:
+    """E(Q), shape (4, 3): the quaternion (w, v) turned by a small spatial rotation dtheta
+    changes by dQ = E(Q) dtheta / 2, and dtheta = 2 E(Q)^T dQ / |Q|^2. [-]"""
+    w, v = quaternion[0], quaternion[1:4]
+    return ca.vertcat(-v.T, w * ca.SX.eye(3) - ca.skew(v))
+
+
 COARSE_STEPS = 5
 """Runge-Kutta steps of the rod from which the solver's Newton matrix is built (the
 residual always uses :data:`design.rod.STEPS`): its relative error, about 1e-4, only makes
@@ -161,24 +168,31 @@ class RingPairModel:
     - ``residual`` -> (r, dr/dx): r = 0 at equilibrium, in m or rad, with exact
       derivatives (NLPs, sensitivities);
     - ``newton`` -> (r, Newton's step (dr/dx)^-1 r, load tangent dx/d(load_scale) =
-      -(dr/dx)^-1 dr/d(load_scale), stability monitor), the equilibrium solver's iteration;
+      -(dr/dx)^-1 dr/d(load_scale), stability monitor, clearance of the rings to the
+      external magnet (:func:`magnet_clearance`)), the equilibrium solver's iteration;
     - ``relaxation`` -> K^-1 r (K = dr/dx with the loads frozen: the robot's own elastic
       stiffness; -K^-1 r points down the total potential), how the robot falls;
-    - ``modes`` -> (K^-1 r, M = K^-1 dr/dx column-major): the eigenvectors of M are the
-      robot's modes (the one with the smallest eigenvalue is where it leaves a fold), its
-      eigenvalues their stiffness relative to the elastic one;
+    - ``descent`` -> (g, H column-major, clearance): the gradient of the total potential
+      energy in the unknowns and its Hessian (exact at equilibria, Gauss-Newton away from
+      them), dimensionless (unknowns over :meth:`unknown_scale`, energy over EI / L), so
+      that the elastic modes have eigenvalues of order one; how the robot falls;
     - ``check`` -> (r, monitor, position, frame, tip angles, clearance of the rings to the
       external magnet (:func:`magnet_clearance`)), for a final state;
     - ``pose`` -> (position (3), frame (3x3), tip angles (2));
     - ``initial`` (command, params) -> x0, the unloaded robot (straight, tip angles =
       command).
 
-    Stability monitor. Linear rod: the Sylvester minors of the stiffness form (all > 0 iff
-    the equilibrium is stable). Large-deflection rod: the matrix M = K^-1 dr/dx,
-    column-major; its eigenvalues are those of the compliance-weighted Hessian of the total
-    potential, so the state is stable iff all have positive real parts, and det M changes
-    sign at every fold (:mod:`design.equilibrium`). The solver's matrices of the
-    large-deflection rod (``newton``, ``relaxation``, the monitors) come from a
+    Stability monitors. Linear rod: the Sylvester minors of the stiffness form (all > 0 iff
+    the equilibrium is stable), in ``newton`` and ``check`` alike. Large-deflection rod:
+    ``newton``'s monitor is dr/dx itself (column-major), whose determinant changes sign at
+    every fold of a branch followed from rest; ``check``'s is the stack of the Jacobians
+    J(s_k) of the problems restricted to bending on [0, s_k] (the rod rigid beyond), at
+    s_k = k L / COARSE_STEPS, k = 0 .. COARSE_STEPS - 1, then J(L) = dr/dx: the state is
+    stable iff every det J(s_k) > 0 and, with torsion, J(0)'s angle block has eigenvalues
+    with positive real parts. (The eigenvalues of K^-1 dr/dx, K the
+    rod's own stiffness, are no test: a rod compressed beyond its dead-load buckling load,
+    held by the field, has an indefinite K.) The solver's matrices of the
+    large-deflection rod (``newton``, ``relaxation``, ``descent``) come from a
     COARSE_STEPS integration of the same rod: their relative error, about 1e-5, makes
     Newton converge linearly at that rate and places a fold to that accuracy, for a fifth
     of the cost; the residual, the pose and ``residual``'s dr/dx are those of the full
@@ -192,7 +206,7 @@ class RingPairModel:
     residual: ca.Function = field(init=False, repr=False, compare=False)
     newton: ca.Function = field(init=False, repr=False, compare=False)
     relaxation: ca.Function = field(init=False, repr=False, compare=False)
-    modes: ca.Function = field(init=False, repr=False, compare=False)
+    descent: ca.Function = field(init=False, repr=False, compare=False)
     check: ca.Function = field(init=False, repr=False, compare=False)
     pose: ca.Function = field(init=False, repr=False, compare=False)
     initial: ca.Function = field(init=False, repr=False, compare=False)
@@ -255,8 +269,10 @@ class RingPairModel:
 
         if large:
             kirchhoff = self._kirchhoff(x, prm, s, angles, weight_rate, applied, with_twist, twist)
-            r, jac, jac_solver, k_solver, dr_dload, position, frame = kirchhoff
-            monitor_solver = modes = ca.vec(ca.solve(k_solver, jac_solver))
+            r, jac, jac_solver, k_solver, dr_dload, monitor, gradient_map, position, frame = (
+                kirchhoff
+            )
+            monitor_solver = ca.vec(jac_solver)
             relaxation = ca.solve(k_solver, r)
         else:
             position, frame = cantilever.tip_pose(x[:4], length)
@@ -276,9 +292,16 @@ class RingPairModel:
             # The stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the
             # total potential for these (to first order conservative) loads: positive
             # definite iff stable (Sylvester's criterion).
-            monitor_solver = sylvester_minors(ca.diagcat(*stiffness) @ jac)
+            gradient_map = ca.diagcat(*stiffness)
+            monitor = monitor_solver = sylvester_minors(gradient_map @ jac)
             relaxation = r  # with the loads frozen dr/dx = I
-            modes = ca.vec(jac)
+        # The total potential's gradient and (Gauss-Newton) Hessian in the unknowns, made
+        # dimensionless: unknowns over their scale, energy over EI / L.
+        scale = ca.vertcat(*[length if k < (2 if self.linear_rod else 3) else 1 for k in range(n)])
+        energy_scale = length / ei
+        gradient = energy_scale * scale * (gradient_map @ r)
+        hessian = energy_scale * ca.diag(scale) @ gradient_map @ jac_solver @ ca.diag(scale)
+        clearance = magnet_clearance(s, position, frame)
         # Newton's step and the load tangent share one factorisation.
         newton_solve = ca.solve(jac_solver, ca.horzcat(r, -dr_dload))
         io = ["x", "command", "params"]
@@ -289,21 +312,26 @@ class RingPairModel:
             "newton": ca.Function(
                 "newton",
                 arguments,
-                [r, newton_solve[:, 0], newton_solve[:, 1], monitor_solver],
+                [r, newton_solve[:, 0], newton_solve[:, 1], monitor_solver, clearance],
                 io,
-                ["r", "step", "load_tangent", "monitor"],
+                ["r", "step", "load_tangent", "monitor", "clearance"],
                 opts,
             ),
             "relaxation": ca.Function(
                 "relaxation", arguments, [relaxation], io, ["direction"], opts
             ),
-            "modes": ca.Function(
-                "modes", arguments, [relaxation, modes], io, ["direction", "M"], opts
+            "descent": ca.Function(
+                "descent",
+                arguments,
+                [gradient, ca.vec(hessian), clearance],
+                io,
+                ["gradient", "hessian", "clearance"],
+                opts,
             ),
             "check": ca.Function(
                 "check",
                 arguments,
-                [r, monitor_solver, position, frame, angles, magnet_clearance(s, position, frame)],
+                [r, monitor, position, frame, angles, clearance],
                 io,
                 ["r", "monitor", "position", "frame", "tip_angles", "clearance"],
                 opts,
@@ -333,7 +361,9 @@ class RingPairModel:
         (n(L) - f, m(L) - tau), scaled alike. dr/dx follows from the shooting map's
         sensitivities by the chain rule, and so do K (the loads frozen: the rod's own tip
         wrench against its base wrench) and dr/d(load_scale). Returns (r, dr/dx, and from
-        COARSE_STEPS the solver's dr/dx, K and dr/d(load_scale), tip position, tip frame).
+        COARSE_STEPS the solver's dr/dx, K and dr/d(load_scale), the stability test's
+        stacked Jacobians, the map from r to the energy's gradient, tip position, tip
+        frame).
         """
         n_rod = self.n_rod
         length, ei = s["free_length"], s.bending_rigidity
@@ -358,11 +388,64 @@ class RingPairModel:
         twist_rows = None if twist is None else ca.diag(twist)
 
         def at(tip: ca.SX):
-            """The residual at an integrated tip, and the loads' derivatives there."""
+            """The residual at an integrated tip, and the loads and their derivatives
+            there."""
             tip_loads, d_pose, d_angles, d_load = loads_at(tip[0:3], tip[3:7], angles, prm)
             rod_wrench = ca.vertcat(base_wrench[0:3] - load * weight_rate * length, tip[7:10])
             r = with_twist(row_scale * (rod_wrench - tip_loads[:6]), tip_loads)
-            return r, (d_pose, d_angles, d_load)
+            return r, (d_pose, d_angles, d_load), tip_loads
+
+        def restricted(nodes: list, tip: ca.SX, loads_derivatives, tip_loads: ca.SX) -> ca.SX:
+            """The Jacobians J(s_k) of the problems restricted to variations that bend
+            the rod on [0, s_k] only (beyond s_k it moves rigidly, with its loads), at the
+            nodes s_k = k L / (len(nodes) - 1) before the tip, stacked column-major;
+            J(0) concerns the rings' angles alone (the identity without torsion), J(L)
+            would be dr/dx. Their admissible variations are nested, so the lowest
+            eigenvalue of the second variation falls with s: the state is stable iff
+            det J(s) > 0 on (0, L] (no focal point; Jacobi's condition, e.g. Bolza,
+            *Lectures on the Calculus of Variations*, 1904, ch. 2) and, with torsion,
+            J(0)'s angle block has positive eigenvalues."""
+            d_pose, d_angles, _ = loads_derivatives
+            f = tip_loads[0:3]
+            q = load * weight_rate
+            d_p = d_pose[:, 0:3]  # loads per tip displacement
+            d_theta = d_pose[:, 3:7] @ (0.5 * _rotation_rates(tip[3:7]))  # per tip rotation
+            h = length / (len(nodes) - 1)
+            points = [state[0:3] for state, _ in nodes]
+            tail = [ca.SX.zeros(3)]  # integral of p over [s_k, L], trapezoid, from the tip
+            for k in range(len(nodes) - 1, 0, -1):
+                tail.insert(0, tail[0] + h / 2 * (points[k] + points[k - 1]))
+            out = []
+            for k, (state, sens) in enumerate(nodes[:-1]):
+                arm = tip[0:3] - points[k]  # tip about the node
+                spread = tail[k] - (length - k * h) * points[k]  # weight beyond, about it
+                rates = _rotation_rates(state[3:7])
+                pose = ca.vertcat(
+                    sens[0:3, 0:6], 2 * rates.T @ sens[3:7, 0:6] / ca.dot(state[3:7], state[3:7])
+                )  # (displacement, spatial rotation) of the node per base wrench
+                rigid = ca.horzcat(d_p, d_theta - d_p @ ca.skew(arm))  # loads per node motion
+                d_force = rigid[0:3, :] @ pose
+                d_torque = (
+                    rigid[3:6, :] @ pose
+                    + ca.skew(arm) @ d_force
+                    + (ca.skew(f) @ ca.skew(arm) + ca.skew(q) @ ca.skew(spread)) @ pose[3:6, :]
+                )
+                rod_rows = ca.vertcat(ca.horzcat(ca.SX.eye(3), ca.SX.zeros(3, 3)), sens[7:10, 0:6])
+                j = ca.diag(row_scale) @ (rod_rows - ca.vertcat(d_force, d_torque))
+                j = j @ ca.diag(wrench_scale)
+                if twist_rows is not None:
+                    by_angles = ca.vertcat(
+                        d_angles[0:3, :], d_angles[3:6, :] + ca.skew(arm) @ d_angles[0:3, :]
+                    )
+                    j = ca.vertcat(
+                        ca.horzcat(j, -ca.diag(row_scale) @ by_angles),
+                        ca.horzcat(
+                            -twist_rows @ rigid[6:8, :] @ pose @ ca.diag(wrench_scale),
+                            ca.SX.eye(2) - twist_rows @ d_angles[6:8, :],
+                        ),
+                    )
+                out.append(ca.vec(j))
+            return ca.vertcat(*out)
 
         def derivatives(sens: ca.SX, loads_derivatives) -> tuple[ca.SX, ca.SX, ca.SX]:
             """(dr/dx, K, dr/d(load_scale)) from the shooting sensitivities (columns: n0,
@@ -389,21 +472,43 @@ class RingPairModel:
                 dr_dload = ca.vertcat(dr_dload, -twist * d_loads[6:8, 6])
             return j, k, dr_dload
 
-        def shoot(steps: int, sensitivities: bool = False):
+        def shoot(steps: int, sensitivities: bool = False, nodes: list | None = None):
             rate = weight_rate if sensitivities else None
-            return rod.shoot(base_wrench, length, ei, load * weight_rate, steps, rate)
+            return rod.shoot(base_wrench, length, ei, load * weight_rate, steps, rate, nodes)
 
         tip, _ = shoot(rod.STEPS)
-        r, loads_derivatives = at(tip)
+        r, loads_derivatives, _ = at(tip)
         # The solver's matrices: the coarse integration's sensitivities with the loads'
         # derivatives at the (full) tip, where the residual needs the loads anyway.
-        _, coarse = shoot(COARSE_STEPS, True)
+        coarse_nodes: list = []
+        coarse_tip, coarse = shoot(COARSE_STEPS, True, coarse_nodes)
         jac_solver, k_solver, dr_dload = derivatives(coarse, loads_derivatives)
+        # The total potential's gradient in the unknowns: the tip's (displacement, spatial
+        # rotation) per unknown, transposed, times the wrench imbalance (the elastic
+        # energy of the rod changes by n(L).dp + m(L).dtheta, the loads' by -f.dp -
+        # tau.dtheta), and (GJ / L) times the twist residual per tip angle.
+        tip_pose = ca.vertcat(
+            coarse[0:3, 0:6],
+            2
+            * _rotation_rates(coarse_tip[3:7]).T
+            @ coarse[3:7, 0:6]
+            / ca.dot(coarse_tip[3:7], coarse_tip[3:7]),
+        ) @ ca.diag(wrench_scale)
+        gradient_map = tip_pose.T @ ca.diag(1 / row_scale)
+        if twist is not None:
+            gradient_map = ca.diagcat(gradient_map, ca.diag(1 / twist))
         # The exact dr/dx: sensitivities and loads of one full integration.
         tip_exact, exact = shoot(rod.STEPS, True)
-        jac = derivatives(exact, at(tip_exact)[1])[0]
+        _, exact_derivatives, exact_loads = at(tip_exact)
+        jac = derivatives(exact, exact_derivatives)[0]
+        # The stability test: the restricted Jacobians at the coarse integration's nodes,
+        # then dr/dx at the tip (two unstable modes appearing within L / COARSE_STEPS of
+        # each other would go unseen; one never does).
+        focal = ca.vertcat(
+            restricted(coarse_nodes, tip_exact, exact_derivatives, exact_loads), ca.vec(jac)
+        )
         frame = rod.frame_from_quaternion(tip[3:7])
-        return r, jac, jac_solver, k_solver, dr_dload, tip[0:3], frame
+        return r, jac, jac_solver, k_solver, dr_dload, focal, gradient_map, tip[0:3], frame
 
     def _field_model(self, s: Symbols):
         """p (3) [m] -> (B [T], dB/dp [T/m]) of the external magnet: the exact cylinder with

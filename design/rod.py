@@ -200,6 +200,7 @@ def shoot(
     distributed_load: Any,
     steps: int = STEPS,
     load_rate: Any = None,
+    nodes: list | None = None,
 ) -> tuple[Any, Any]:
     """Integrate the clamped rod from its base wrench to the tip (the shooting map).
 
@@ -207,6 +208,8 @@ def shoot(
     length, bending_rigidity, distributed_load : as :func:`integrate`. [m, N m^2, N/m]
     load_rate : with it, also the sensitivities: dq/dlambda for a load factor lambda that
         scales the distributed load, shape (3,). [N/m]
+    nodes : with ``load_rate``, a list that receives (state, sensitivity) at every node
+        s_k = k L / steps, k = 0..steps (the base included).
     Returns the tip state (p (3) [m], Q (4) [-], m(L) (3) [N m]), shape (10,), and, given
     ``load_rate``, its derivative with respect to (n0, m0, lambda), shape (10, 7) (else
     None). The tip force is n(L) = n0 - q L exactly.
@@ -224,6 +227,8 @@ def shoot(
     sens = ca.SX.zeros(10, 7)
     sens[7:10, 3:6] = ca.SX.eye(3)
     step = sensitivity_step_function()
+    if nodes is not None:
+        nodes.append((state, sens))
     for k in range(steps):
         state, sens = step(
             state,
@@ -235,6 +240,8 @@ def shoot(
             load_rate,
             k * h,
         )
+        if nodes is not None:
+            nodes.append((state, sens))
     return state, sens
 
 

@@ -1,0 +1,545 @@
+"""An independent solve of the ring-pair robot's state, written separately from the
+project's solver, for tests.
+
+The same physics, written anew in numpy from the design record: the external field from
+magpylib's cylinder (``near_field``) or a numpy point dipole, the force on a ring by
+central differences of that field, the rings' mutual torque with the project's K12 (tested
+on its own), gravity, and two rods:
+
+- the linear cantilever (the paper's small-deflection model, the equations of
+  design/cantilever.py): its equilibrium equations r(q) = q - C Q(q) - q_w (and the
+  transmissions' twist) are followed along the flow x' = -r (downhill) as the loads are
+  ramped from zero in small steps, a tracing of the quasi-static path;
+- the large-deflection rod as a chain of N rigid links joined at their midpoints by
+  bending springs EI / h, frames carried by the joints' rotations without twist (the
+  discrete Kirchhoff rod with infinite torsional rigidity; the tip converges to the
+  continuous rod's as 1 / (4 N^2)); its total potential energy is minimised (L-BFGS,
+  analytic gradient) at each step of the same load ramp, starting from the last minimum,
+  so that it follows the branch and, past a fold, goes downhill to the next minimum.
+
+Both start from the unloaded, straight robot with the rings at their commanded angles.
+:func:`energy_hessian_eigenvalues` gives the finite-difference Hessian of the chain's
+energy at a state (a stability check independent of the solver's). SI units throughout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import magpylib as magpy
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import minimize
+from scipy.spatial.transform import Rotation
+
+from design.params import Design
+from design.ring_coupling import coupling_coefficient
+
+MU0 = 4e-7 * np.pi * 1.00000000055  # CODATA 2018 vacuum permeability [T m / A]
+FD_STEP = 2e-6
+"""Central-difference step of the field gradient. [m]"""
+
+
+@dataclass(frozen=True)
+class Robot:
+    """What the oracle needs, computed from the design record. [SI]"""
+
+    length: float
+    ei: float
+    gj: np.ndarray  # (wire -> distal ring, catheter -> proximal ring)
+    mass_per_length: float
+    moment: float  # of each ring
+    spacing: float
+    ring_mass: float
+    tip_mass: float
+    k12: float
+    gravity: np.ndarray
+
+
+def robot(design: Design) -> Robot:
+    r, t = design.robot, design.tip
+
+    def section(tube):
+        i = np.pi * (tube.outer_diameter**4 - tube.inner_diameter**4) / 64
+        g = tube.youngs_modulus / (2 * (1 + tube.poisson_ratio))
+        area = np.pi * (tube.outer_diameter**2 - tube.inner_diameter**2) / 4
+        return tube.youngs_modulus * i, g * 2 * i, tube.density * area
+
+    ei_c, gj_c, mu_c = section(r.catheter)
+    ei_w, gj_w, mu_w = section(r.wire)
+    volume = np.pi * (t.magnet_outer_diameter**2 - t.magnet_inner_diameter**2) / 4
+    volume *= t.magnet_length
+    spacing = t.magnet_length + t.gap
+    k12 = coupling_coefficient(
+        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, spacing, t.remanence
+    )
+    g = design.environment.gravity
+    return Robot(
+        length=r.free_length,
+        ei=ei_c + ei_w,
+        gj=np.array([gj_w, gj_c]),
+        mass_per_length=mu_c + mu_w,
+        moment=t.remanence / MU0 * volume,
+        spacing=spacing,
+        ring_mass=t.density * volume,
+        tip_mass=t.mass,
+        k12=k12,
+        gravity=np.zeros(3) if g is None else np.asarray(g, float),
+    )
+
+
+class Field:
+    """B at points (k, 3) of the external magnet: magpylib's cylinder, or its dipole."""
+
+    def __init__(self, design: Design, near: bool) -> None:
+        e = design.external_magnet
+        self.near = near
+        axis = np.asarray(e.magnetization, float)
+        axis = axis / np.linalg.norm(axis)
+        self.centre = np.asarray(e.center, float)
+        volume = np.pi * e.diameter**2 / 4 * e.length
+        self.moment = e.remanence / MU0 * volume * axis
+        self.axis, self.radius, self.half = axis, e.diameter / 2, e.length / 2
+        self.remanence = e.remanence
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        points = np.atleast_2d(points)
+        d = points - self.centre
+        if self.near:  # magpylib's kernel (Derby & Olbert 2010) in the magnet's cylinder frame
+            z = d @ self.axis
+            radial = d - z[:, None] * self.axis
+            rho = np.linalg.norm(radial, axis=1)
+            b_rho, _, b_z = magpy.core.magnet_cylinder_axial_Bfield(
+                np.full(len(z), self.half / self.radius), rho / self.radius, z / self.radius
+            )
+            unit = radial / np.where(rho > 0, rho, 1.0)[:, None]
+            return self.remanence * (b_rho[:, None] * unit + b_z[:, None] * self.axis)
+        r = np.linalg.norm(d, axis=1)[:, None]
+        return MU0 / (4 * np.pi) * (3 * d * (d @ self.moment)[:, None] / r**5 - self.moment / r**3)
+
+    def with_gradient(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """B (k, 3) and dB/dp (k, 3, 3), [i, j] = dB_i / dp_j, by central differences."""
+        steps = FD_STEP * np.vstack([np.eye(3), -np.eye(3)])
+        allp = np.vstack([points] + [points + s for s in steps])
+        b = self(allp).reshape(7, len(points), 3)
+        grad = (b[1:4] - b[4:7]).transpose(1, 2, 0) / (2 * FD_STEP)
+        return b[0], grad
+
+
+def ring_clearance(design: Design, tip: np.ndarray, tangent: np.ndarray) -> float:
+    """The smaller distance of the two rings' bounding spheres (about the rod tip and one
+    spacing along the tangent) to the external magnet's solid cylinder; negative inside
+    it. [m]"""
+    e, t = design.external_magnet, design.tip
+    axis = np.asarray(e.magnetization, float)
+    axis = axis / np.linalg.norm(axis)
+    reach = np.hypot(t.magnet_outer_diameter / 2, t.magnet_length / 2)
+    out = np.inf
+    for centre in (tip, tip + (t.magnet_length + t.gap) * tangent):
+        d = centre - np.asarray(e.center, float)
+        along = d @ axis
+        across = np.linalg.norm(d - along * axis)
+        beyond = np.hypot(max(abs(along) - e.length / 2, 0.0), max(across - e.diameter / 2, 0.0))
+        out = min(out, beyond - reach)
+    return float(out)
+
+
+def _frame_from_rotation_vector(phi: np.ndarray) -> np.ndarray:
+    return Rotation.from_rotvec(phi).as_matrix()
+
+
+def ring_moments(frame: np.ndarray, angles: np.ndarray, moment: float) -> np.ndarray:
+    """Moments (2, 3) of the distal and proximal rings turned by ``angles`` in the tip
+    frame (columns tangent, y, z)."""
+    return moment * (np.cos(angles)[:, None] * frame[:, 1] + np.sin(angles)[:, None] * frame[:, 2])
+
+
+# ---------------------------------------------------------------------------- linear rod
+
+
+def _linear_residual(
+    x: np.ndarray,
+    command: np.ndarray,
+    rb: Robot,
+    field: Field,
+    lam: float,
+    torsion: bool,
+    gravity: bool,
+) -> np.ndarray:
+    """The paper's linear cantilever and the transmissions' twist, written anew."""
+    L, ei = rb.length, rb.ei
+    q = x[:4]
+    angles = x[4:6] if torsion else command
+    frame = _frame_from_rotation_vector(np.array([0.0, q[2], q[3]]))
+    tangent = frame[:, 0]
+    tip = np.array([L, q[0], q[1]])
+    centres = np.vstack([tip + rb.spacing * tangent, tip])  # distal, proximal
+    moments = lam * ring_moments(frame, angles, rb.moment)
+    b, grad = field.with_gradient(centres)
+    forces = np.einsum("kij,ki->kj", grad, moments)  # grad(m . B)
+    torques = np.cross(moments, b)
+    force = forces.sum(axis=0)
+    torque = torques.sum(axis=0) + rb.spacing * np.cross(tangent, forces[0])
+    w = np.zeros(3)
+    if gravity:
+        g = lam * rb.gravity
+        ring_weight = rb.ring_mass * g
+        force = force + 2 * ring_weight + rb.tip_mass * g
+        torque = torque + rb.spacing * np.cross(tangent, ring_weight)
+        w = rb.mass_per_length * g
+    bending = torque - (torque @ tangent) * tangent
+    a, bb, c = L**3 / (3 * ei), L**2 / (2 * ei), L / ei
+    loaded = np.array(
+        [
+            a * force[1] + bb * bending[2],
+            a * force[2] - bb * bending[1],
+            -bb * force[2] + c * bending[1],
+            bb * force[1] + c * bending[2],
+        ]
+    )
+    weight = np.array(
+        [
+            L**4 / (8 * ei) * w[1],
+            L**4 / (8 * ei) * w[2],
+            -(L**3) / (6 * ei) * w[2],
+            L**3 / (6 * ei) * w[1],
+        ]
+    )
+    r = q - loaded - weight
+    if not torsion:
+        return r
+    axial = np.einsum("ki,i->k", torques, tangent)
+    coupling = lam**2 * rb.k12 * np.sin(angles[0] - angles[1])
+    axial = axial + np.array([coupling, -coupling])
+    return np.concatenate([r, angles - command - L / rb.gj * axial])
+
+
+def _jacobian(fun, x: np.ndarray, step: float = 1e-7) -> np.ndarray:
+    """Central-difference Jacobian of ``fun`` at x."""
+    cols = []
+    for i in range(x.size):
+        e = np.zeros_like(x)
+        e[i] = step
+        cols.append((fun(x + e) - fun(x - e)) / (2 * step))
+    return np.column_stack(cols)
+
+
+def linear_state(
+    design: Design,
+    effects: frozenset[str],
+    command: np.ndarray,
+    ramp: int = 20,
+    tolerance: float = 1e-12,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The linear rod's state at ``command`` (2,) [rad]: the flow x' = -r followed with
+    error control (scipy's Radau, an implicit Runge-Kutta method, so the trajectory is the
+    flow's and does not jump to another equilibrium) at each step of the load ramp until
+    the residual is below 1e-9, then polished by Newton at full load. r = C grad V with C
+    the compliance (symmetric positive definite), so the flow goes downhill of the
+    potential V and rests only in a minimum, where the real robot comes to rest. Returns
+    (unknowns (4 or 6,), tip position (3,), the smallest :func:`ring_clearance` at the
+    states of the ramp [m]); NaN if the flow is lost."""
+    rb, field = robot(design), Field(design, "near_field" in effects)
+    torsion, gravity = "torsion" in effects, "gravity" in effects
+    x = np.zeros(6 if torsion else 4)
+    if torsion:
+        x[4:] = command
+    nan = np.full_like(x, np.nan), np.full(3, np.nan), np.nan
+    clearance = np.inf
+
+    def tip_of(y):
+        return np.array([rb.length, y[0], y[1]])
+
+    def tangent_of(y):
+        return _frame_from_rotation_vector(np.array([0.0, y[2], y[3]]))[:, 0]
+
+    for lam in np.linspace(0.0, 1.0, ramp + 1)[1:]:
+
+        def flow(_t, y, lam=lam):
+            return -_linear_residual(y, command, rb, field, lam, torsion, gravity)
+
+        def rested(_t, y, lam=lam):
+            return np.log(np.abs(flow(0.0, y, lam)).max() + 1e-300) - np.log(1e-9)
+
+        rested.terminal = True
+        if np.abs(flow(0.0, x)).max() > 1e-9:
+            atol = 1e-10 * np.where(np.arange(x.size) < 2, rb.length, 1.0)  # [m], [rad]
+            sol = solve_ivp(
+                flow, (0.0, 1e6), x, method="Radau", events=rested, rtol=1e-6, atol=atol
+            )
+            x = sol.y[:, -1]
+            # failed, or never came to rest (its own finite-difference noise is ~1e-9)
+            if sol.status < 0 or np.abs(flow(0.0, x)).max() > 1e-7:
+                return nan
+        clearance = min(clearance, ring_clearance(design, tip_of(x), tangent_of(x)))
+    for _ in range(20):
+        r = -flow(0.0, x)
+        if np.abs(r).max() < tolerance:
+            break
+        x = x - np.linalg.solve(-_jacobian(lambda y: flow(0.0, y), x), r)
+    return x, tip_of(x), min(clearance, ring_clearance(design, tip_of(x), tangent_of(x)))
+
+
+def linear_stiffness_eigenvalues(
+    design: Design, effects: frozenset[str], command: np.ndarray, x: np.ndarray
+) -> np.ndarray:
+    """Eigenvalues of the symmetric part of K_s dr/dx at x (K_s: the cantilever's stiffness
+    and the transmissions' GJ / L; dr/dx by central differences), each scaled by its
+    diagonal: the Hessian of the total potential of the linear model (conservative to
+    first order), so all positive iff stable."""
+    rb, field = robot(design), Field(design, "near_field" in effects)
+    torsion, gravity = "torsion" in effects, "gravity" in effects
+    L, ei = rb.length, rb.ei
+    k = np.array(
+        [
+            [12 * ei / L**3, 0, 0, -6 * ei / L**2],
+            [0, 12 * ei / L**3, 6 * ei / L**2, 0],
+            [0, 6 * ei / L**2, 4 * ei / L, 0],
+            [-6 * ei / L**2, 0, 0, 4 * ei / L],
+        ]
+    )
+    if torsion:
+        k = np.block([[k, np.zeros((4, 2))], [np.zeros((2, 4)), np.diag(rb.gj / L)]])
+    jac = _jacobian(lambda y: _linear_residual(y, command, rb, field, 1.0, torsion, gravity), x)
+    h = k @ jac
+    h = 0.5 * (h + h.T)
+    d = 1 / np.sqrt(np.abs(np.diag(h)))
+    return np.linalg.eigvalsh(h * np.outer(d, d))
+
+
+# ---------------------------------------------------------------------------- chain rod
+
+
+def _exp(w: np.ndarray) -> np.ndarray:
+    """Rotations (N, 3, 3) of rotation vectors (N, 3)."""
+    return Rotation.from_rotvec(w).as_matrix()
+
+
+def _right_jacobian(w: np.ndarray) -> np.ndarray:
+    """Right Jacobians (N, 3, 3) of SO(3): d Exp(w) = Exp(w) [J_r(w) dw]^."""
+    theta = np.linalg.norm(w, axis=1)
+    k = np.zeros((len(w), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
+    small = theta < 1e-6
+    t = np.where(small, 1.0, theta)
+    a = np.where(small, 0.5 - theta**2 / 24, (1 - np.cos(t)) / t**2)
+    b = np.where(small, 1 / 6 - theta**2 / 120, (t - np.sin(t)) / t**3)
+    return np.eye(3) - a[:, None, None] * k + b[:, None, None] * (k @ k)
+
+
+class Chain:
+    """The large-deflection rod as N links (see the module docstring); unknowns: the
+    joints' rotation vectors (y, z components in the link frame), then the tip ring angles
+    with torsion."""
+
+    def __init__(self, design: Design, effects: frozenset[str], links: int = 100) -> None:
+        self.rb = robot(design)
+        self.field = Field(design, "near_field" in effects)
+        self.torsion = "torsion" in effects
+        self.gravity = "gravity" in effects
+        self.n = links
+        self.h = self.rb.length / links
+
+    def _shape(self, w2: np.ndarray):
+        n, h = self.n, self.h
+        w = np.zeros((n, 3))
+        w[:, 1:] = w2.reshape(n, 2)
+        rot = _exp(w)
+        frames = np.empty((n + 1, 3, 3))
+        frames[0] = np.eye(3)
+        for k in range(n):
+            frames[k + 1] = frames[k] @ rot[k]
+        tangents = frames[:, :, 0]
+        joints = np.empty((n, 3))
+        joints[0] = [h / 2, 0.0, 0.0]
+        joints[1:] = joints[0] + h * np.cumsum(tangents[1:n], axis=0)
+        tip = joints[-1] + h / 2 * tangents[n]
+        return w, frames, joints, tip
+
+    def _masses(self, joints: np.ndarray, tip: np.ndarray, tangent: np.ndarray):
+        """Point masses (k,) at positions (k, 3) of the rod links (beyond the clamp's half
+        link), the rings and the tip mass, and the joint index each lies beyond."""
+        rb, h, n = self.rb, self.h, self.n
+        centres = np.vstack([(joints[:-1] + joints[1:]) / 2, (joints[-1] + tip) / 2])
+        masses = np.full(n, rb.mass_per_length * h)
+        masses[-1] /= 2
+        distal = tip + rb.spacing * tangent
+        points = np.vstack([centres, [tip, distal, tip]])
+        mass = np.concatenate([masses, [rb.ring_mass, rb.ring_mass, rb.tip_mass]])
+        beyond = np.concatenate([np.arange(n), [n - 1, n - 1, n - 1]])
+        return mass, points, beyond
+
+    def energy_and_gradient(self, u: np.ndarray, command: np.ndarray, lam: float):
+        rb, n, h = self.rb, self.n, self.h
+        w2 = u[: 2 * n]
+        angles = u[2 * n :] if self.torsion else command
+        w, frames, joints, tip = self._shape(w2)
+        frame = frames[n]
+        tangent = frame[:, 0]
+        centres = np.vstack([tip + rb.spacing * tangent, tip])
+        moments = lam * ring_moments(frame, angles, rb.moment)
+        b, grad = self.field.with_gradient(centres)
+        forces = np.einsum("kij,ki->kj", grad, moments)
+        torques = np.cross(moments, b)
+        energy = rb.ei / (2 * h) * np.sum(w2**2) - np.sum(moments * b)
+        # Loads beyond each joint: force sum and moment about the origin, then about it.
+        total_force = np.zeros((n, 3))
+        total_moment = np.zeros((n, 3))
+        ring_force = forces.sum(axis=0)
+        ring_moment = torques.sum(axis=0) + np.cross(centres, forces).sum(axis=0)
+        total_force[:] = ring_force
+        total_moment[:] = ring_moment
+        if self.gravity:
+            g = lam * rb.gravity
+            mass, points, beyond = self._masses(joints, tip, tangent)
+            energy -= np.sum(mass * (points @ g))
+            weights = mass[:, None] * g
+            f_joint = np.zeros((n, 3))
+            m_joint = np.zeros((n, 3))
+            np.add.at(f_joint, beyond, weights)
+            np.add.at(m_joint, beyond, np.cross(points, weights))
+            total_force += np.cumsum(f_joint[::-1], axis=0)[::-1]
+            total_moment += np.cumsum(m_joint[::-1], axis=0)[::-1]
+        about = total_moment - np.cross(joints, total_force)  # moment of loads beyond k
+        # dE/d(spatial rotation at joint k) = -about_k; in the joint's body coordinates:
+        body = np.einsum("kji,kj->ki", frames[1:], -about)
+        grad_w = np.einsum("kji,kj->ki", _right_jacobian(w), body)[:, 1:]
+        gradient = rb.ei / h * w2 + grad_w.ravel()
+        if not self.torsion:
+            return energy, gradient
+        twist = angles - command
+        coupling = lam**2 * rb.k12
+        energy += np.sum(rb.gj / (2 * rb.length) * twist**2) + coupling * np.cos(
+            angles[0] - angles[1]
+        )
+        dm = (
+            lam
+            * rb.moment
+            * (-np.sin(angles)[:, None] * frame[:, 1] + np.cos(angles)[:, None] * frame[:, 2])
+        )
+        s = np.sin(angles[0] - angles[1])
+        grad_a = rb.gj / rb.length * twist - np.sum(dm * b, axis=1) - coupling * np.array([s, -s])
+        return energy, np.concatenate([gradient, grad_a])
+
+    def start(self, command: np.ndarray) -> np.ndarray:
+        u = np.zeros(2 * self.n + (2 if self.torsion else 0))
+        if self.torsion:
+            u[2 * self.n :] = command
+        return u
+
+    def tip(self, u: np.ndarray) -> np.ndarray:
+        return self._shape(u[: 2 * self.n])[3]
+
+    def clearance(self, design: Design, u: np.ndarray) -> float:
+        """:func:`ring_clearance` of the chain's rings. [m]"""
+        _, frames, _, tip = self._shape(u[: 2 * self.n])
+        return ring_clearance(design, tip, frames[self.n][:, 0])
+
+    def relax(self, u: np.ndarray, command: np.ndarray, lam: float, tight: bool) -> np.ndarray:
+        result = minimize(
+            self.energy_and_gradient,
+            u,
+            args=(command, lam),
+            jac=True,
+            method="L-BFGS-B",
+            options={
+                "maxiter": 20000,
+                "maxcor": 30,
+                "ftol": 1e-16 if tight else 1e-12,
+                "gtol": 1e-14 if tight else 1e-10,
+            },
+        )
+        return result.x
+
+
+def chain_state(
+    design: Design,
+    effects: frozenset[str],
+    command: np.ndarray,
+    ramp: int = 40,
+    links: int = 100,
+) -> tuple[Chain, np.ndarray, np.ndarray, float]:
+    """The chain's state at ``command`` (2,) [rad]: its energy minimised at each step of the
+    load ramp from the straight robot. Returns (chain, unknowns, tip position (3,), the
+    smallest :func:`ring_clearance` at the states of the ramp [m])."""
+    chain = Chain(design, effects, links)
+    u = chain.start(command)
+    clearance = np.inf
+    for lam in np.linspace(0.0, 1.0, ramp + 1)[1:]:
+        u = chain.relax(u, command, lam, tight=lam == 1.0)
+        clearance = min(clearance, chain.clearance(design, u))
+    return chain, u, chain.tip(u), clearance
+
+
+def energy_hessian_eigenvalues(chain: Chain, u: np.ndarray, command: np.ndarray) -> np.ndarray:
+    """Eigenvalues of the chain's energy Hessian at ``u`` by central differences of the
+    gradient, scaled by the joints' bending stiffness EI / h (1 for the bare rod)."""
+    return np.linalg.eigvalsh(_hessian(chain, u, command)) / (chain.rb.ei / chain.h)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def rod_frames(
+    design: Design, effects: frozenset[str], base_wrench: np.ndarray, points: np.ndarray
+) -> np.ndarray:
+    """Frames (k, 3, 3) of the Kirchhoff rod at arc lengths ``points`` [m], integrated
+    anew (scipy's DOP853) from the clamp with the base force and moment ``base_wrench``
+    (6,) [N, N m]: p' = t, R' = [omega] R with omega = (m - (t.m) t) / EI (bending only),
+    m' = n x t, n = n0 - q s (q the rod's weight per length with gravity)."""
+    rb = robot(design)
+    q = rb.mass_per_length * rb.gravity if "gravity" in effects else np.zeros(3)
+    n0, m0 = base_wrench[:3], base_wrench[3:]
+
+    def rhs(s, y):
+        frame = y[3:12].reshape(3, 3)
+        t, m = frame[:, 0], y[12:15]
+        omega = (m - (t @ m) * t) / rb.ei
+        return np.concatenate([t, (_skew(omega) @ frame).ravel(), np.cross(n0 - q * s, t)])
+
+    y0 = np.concatenate([np.zeros(3), np.eye(3).ravel(), m0])
+    sol = solve_ivp(
+        rhs, (0.0, rb.length), y0, method="DOP853", t_eval=points, rtol=1e-12, atol=1e-14
+    )
+    frames = sol.y[3:12].T.reshape(-1, 3, 3)
+    u, _, vt = np.linalg.svd(frames)  # re-orthonormalise
+    return u @ vt
+
+
+def chain_unknowns(chain: Chain, frames: np.ndarray, tip_angles: np.ndarray) -> np.ndarray:
+    """The chain's unknowns that put its links along a rod with ``frames`` (n + 1, 3, 3) at
+    s = k h (the links' centres): each joint's rotation log(R_k^T R_k+1), its twist dropped
+    (zero for a rod without twist, to the order of h^2); then the tip angles with
+    torsion."""
+    w = Rotation.from_matrix(np.einsum("kji,kjl->kil", frames[:-1], frames[1:])).as_rotvec()
+    u = w[:, 1:].ravel()
+    return np.concatenate([u, tip_angles]) if chain.torsion else u
+
+
+def _hessian(chain: Chain, u: np.ndarray, command: np.ndarray, step: float = 1e-6) -> np.ndarray:
+    """The chain's energy Hessian at u by central differences of its gradient, symmetrised."""
+    n = u.size
+    hess = np.empty((n, n))
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = step
+        hess[:, i] = (
+            chain.energy_and_gradient(u + e, command, 1.0)[1]
+            - chain.energy_and_gradient(u - e, command, 1.0)[1]
+        ) / (2 * step)
+    return 0.5 * (hess + hess.T)
+
+
+def chain_equilibrium_near(
+    chain: Chain, u: np.ndarray, command: np.ndarray, iterations: int = 6
+) -> np.ndarray:
+    """The chain's equilibrium (of any stability) next to u: Newton on its energy gradient
+    with the finite-difference Hessian."""
+    for _ in range(iterations):
+        g = chain.energy_and_gradient(u, command, 1.0)[1]
+        if np.abs(g).max() < 1e-12 * chain.rb.ei / chain.h:
+            break
+        u = u - np.linalg.solve(_hessian(chain, u, command), g)
+    return u
