@@ -104,8 +104,15 @@ POLISH_ATTEMPTS = 3
 up."""
 POLISH_BELOW = 1e-3
 POLISH_GRADIENT = 1e-3
-"""A falling state is polished by Newton once its step or its energy gradient is below
-these (dimensionless). [-]"""
+"""A falling state is polished by Newton once its step or its downhill direction G^-1 g
+is below these (dimensionless). [-]"""
+HESSIAN_TOLERANCE = 1e-3
+"""An eigenvalue of the large-deflection rod's energy Hessian (relative to the elastic
+ones, which are of order one) below -HESSIAN_TOLERANCE is an unstable mode; closer to
+zero, the constraint-like axial modes of a nearly straight rod (a single mode that has
+just turned unstable shows in det dr/dx instead). [-]"""
+TIE = 1e-6
+"""Two falls whose distances differ by less than this fraction are a tie. [-]"""
 DISTINCT = 1e-6
 """Two states differ when their unknowns differ by more than this, dimensionless. [-]"""
 SUBSTEP = np.deg2rad(1.0)
@@ -274,16 +281,20 @@ def _fold_free(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
 def _stable(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
     """Exact stability of each column from the ``check`` monitor, wherever the state came
     from: all Sylvester minors positive (linear rod; the Hessian of the total potential),
-    or for the large-deflection rod det J(s_k) > 0 at every node and, with torsion, J(0)'s
-    angle block with eigenvalues of positive real part (Jacobi's condition on nested
-    variations, :class:`design.model.RingPairModel`)."""
+    or for the large-deflection rod det J(s_k) > 0 at every node (Jacobi's condition on
+    nested variations), no eigenvalue of the energy's Hessian below -HESSIAN_TOLERANCE
+    and, with torsion, J(0)'s angle block with eigenvalues of positive real part
+    (:class:`design.model.RingPairModel`)."""
     if model.linear_rod:
         return np.all(monitor > 0, axis=0)
     m = _matrices(model, monitor)
     ok = np.isfinite(m).all(axis=(1, 2, 3))
     out = np.zeros(len(m), bool)
     if ok.any():
-        good = (np.linalg.det(m[ok]) > 0).all(axis=1)
+        hessian = m[ok][:, -1]
+        good = (np.linalg.det(m[ok][:, :-1]) > 0).all(axis=1)
+        lowest = np.linalg.eigvalsh(0.5 * (hessian + hessian.transpose(0, 2, 1)))[:, 0]
+        good &= lowest > -HESSIAN_TOLERANCE
         if model.n_unknowns > model.n_rod:
             angles = m[ok][:, 0, model.n_rod :, model.n_rod :]
             good &= (np.linalg.eigvals(angles).real > 0).all(axis=1)
@@ -449,18 +460,20 @@ def _fall(
     """The stable states the robot falls into from x at load factors lam (a fold, or an
     unstable equilibrium).
 
-    The robot goes down its total potential energy. In the modes of the energy's Hessian H
-    in the unknowns (:class:`design.model.RingPairModel` ``descent``, dimensionless:
-    eigenvectors v, eigenvalues mu, the stiffness of each mode relative to the elastic one)
-    the gradient g has components a; each mode moves by -a / |mu| (with |mu| at least
-    MODE_FLOOR): Newton's step in the stable modes, and in an unstable mode the same
+    The robot goes down its total potential energy. In the modes of M = G^-1 H (H the
+    energy's Hessian in the unknowns, G a metric: :class:`design.model.RingPairModel`
+    ``descent``; eigenvectors v, eigenvalues mu, the stiffness of each mode relative to
+    the elastic one) the downhill direction -G^-1 g has components -a; each mode moves by
+    -a / |mu| (with |mu| at least MODE_FLOOR): Newton's step in the stable modes, and in
+    an unstable mode the same
     distance downhill instead of up to the saddle ("saddle-free Newton": Dauphin et al.,
     NeurIPS 2014), the whole step at most TRUST long. It starts kicked by KICK both ways
     along the softest mode, so that a symmetric bifurcation is left too, and is polished by
-    Newton once its step or gradient is small, the polished state judged by the exact
+    Newton once no mode is unstable and its step or pull is small, judged by the exact
     check (a polish that lands on an unstable equilibrium kicks the column off again). A
     way on which the rings reach the external magnet ends there (contact, which is not
-    modelled). Of the two ways the stable state nearer x is taken (the first on a tie).
+    modelled). Of the two ways the stable state nearer x is taken (the first where they
+    tie to TIE: at a symmetric bifurcation the states are mirror images).
     Returns (states, found, touched: no state found and the fall reached the magnet)."""
     kern = kernels(model)
     n, m = x.shape
@@ -479,37 +492,45 @@ def _fall(
         a = np.flatnonzero(alive & ~found)
         if a.size == 0:
             break
-        gradient, hessian, clearance = kern.run(
+        direction, modes, clearance = kern.run(
             "descent", [xs[:, a], c2[:, a], lam2[None, a]], _columns(p2, a)
         )
-        matrices = hessian.T.reshape(-1, n, n)
+        matrices = modes.T.reshape(-1, n, n).transpose(0, 2, 1)
         inside = ~(clearance[0] >= 0)
         touched[a[inside]] = True
-        good = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(gradient).all(axis=0)
+        good = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(direction).all(axis=0)
         good &= ~inside
         alive[a[~good]] = False
-        a, gradient, matrices = a[good], gradient[:, good], matrices[good]
+        a, direction, matrices = a[good], direction[:, good], matrices[good]
         if a.size == 0:
             continue
-        # (H is symmetric at equilibria; its symmetric part elsewhere)
-        values, vectors = np.linalg.eigh(0.5 * (matrices + matrices.transpose(0, 2, 1)))
+        values, vectors = np.linalg.eig(matrices)
         fresh = ~kicked[a]
         if fresh.any():  # leave along the softest mode, both ways
-            soft = vectors[np.flatnonzero(fresh), :, 0].T  # (eigh sorts ascending)
-            # (a mode's sign is arbitrary: its largest component counts positive)
-            lead = soft[np.argmax(np.abs(soft), axis=0), np.arange(soft.shape[1])]
-            kick = KICK * np.sign(lead) / np.where(lead != 0, np.abs(lead), 1.0)
-            xs[:, a[fresh]] += sign[a[fresh]] * kick * soft * scale[:, a[fresh]]
+            soft = vectors[np.flatnonzero(fresh), :, np.argmin(values.real[fresh], axis=1)].real
+            relative = soft.T / scale[:, a[fresh]]
+            # (a mode's sign is arbitrary: its first component of at least half the largest
+            # magnitude counts positive, so that a symmetric mode's sign, and the side the
+            # robot falls to at a symmetric bifurcation, does not depend on rounding)
+            size = np.abs(relative)
+            first = np.argmax(size >= 0.5 * size.max(axis=0), axis=0)
+            lead = relative[first, np.arange(relative.shape[1])]
+            big = size.max(axis=0)
+            kick = KICK * np.sign(lead) / np.where(big > 0, big, 1.0)
+            xs[:, a[fresh]] += sign[a[fresh]] * kick * soft.T
             kicked[a[fresh]] = True
-        components = np.einsum("kji,jk->ki", vectors, gradient)
-        magnitude = np.maximum(np.abs(values), MODE_FLOOR)
-        step = np.einsum("kij,kj->ik", vectors, components / magnitude)
-        size = np.max(np.abs(step), axis=0)
+        components = np.linalg.solve(vectors, direction.T[:, :, None].astype(complex))[:, :, 0]
+        magnitude = np.maximum(np.abs(values.real), MODE_FLOOR)
+        step = np.einsum("kij,kj->ki", vectors, components / magnitude).real.T
+        size = _norm(step, scale[:, a])
         step *= np.minimum(1.0, TRUST / np.maximum(size, 1e-300))
-        xs[:, a] -= step * scale[:, a]
-        # (near a straight rod the axial force and moment are constraint-like: the energy
-        # hardly depends on them, and the descent's steps along them need not shrink)
-        ready = a[(size < POLISH_BELOW) | (np.max(np.abs(gradient), axis=0) < POLISH_GRADIENT)]
+        xs[:, a] -= step
+        # Polished where no mode is unstable (within MODE_FLOOR: near a straight rod the
+        # axial force and moment are constraint-like, the energy hardly depends on them and
+        # the steps along them need not shrink) and the step or the pull is small.
+        pull = _norm(direction, scale[:, a])
+        settled = (values.real > -MODE_FLOOR).all(axis=1)
+        ready = a[settled & ((size < POLISH_BELOW) | (pull < POLISH_GRADIENT))]
         if ready.size:
             polished, _, ok = _newton(
                 model,
@@ -527,7 +548,7 @@ def _fall(
             kicked[ready[~ok]] = False  # near an unstable equilibrium: leave it again
             alive[ready[polishes[ready] > POLISH_ATTEMPTS]] = False
     distance = np.where(found, _norm(xs - x[:, both], scale), np.inf)
-    second = distance[m:] < distance[:m]
+    second = distance[m:] < distance[:m] * (1 - TIE)
     pick = np.where(second, np.arange(m) + m, np.arange(m))
     if scratch.outs is not None:
         full = found[pick] & scratch.done[pick]

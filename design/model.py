@@ -172,10 +172,12 @@ class RingPairModel:
       external magnet (:func:`magnet_clearance`)), the equilibrium solver's iteration;
     - ``relaxation`` -> K^-1 r (K = dr/dx with the loads frozen: the robot's own elastic
       stiffness; -K^-1 r points down the total potential), how the robot falls;
-    - ``descent`` -> (g, H column-major, clearance): the gradient of the total potential
-      energy in the unknowns and its Hessian (exact at equilibria, Gauss-Newton away from
-      them), dimensionless (unknowns over :meth:`unknown_scale`, energy over EI / L), so
-      that the elastic modes have eigenvalues of order one; how the robot falls;
+    - ``descent`` -> (G^-1 g, M = G^-1 H column-major, clearance): the gradient g of the
+      total potential energy in the unknowns and its Hessian H (exact at equilibria,
+      Gauss-Newton away from them), in a metric G: the elastic stiffness for the linear
+      rod (so M = dr/dx), the unknowns over :meth:`unknown_scale` with the energy over
+      EI / L for the large-deflection rod (whose own stiffness can be indefinite); the
+      elastic modes have eigenvalues of order one. How the robot falls;
     - ``check`` -> (r, monitor, position, frame, tip angles, clearance of the rings to the
       external magnet (:func:`magnet_clearance`)), for a final state;
     - ``pose`` -> (position (3), frame (3x3), tip angles (2));
@@ -187,11 +189,19 @@ class RingPairModel:
     ``newton``'s monitor is dr/dx itself (column-major), whose determinant changes sign at
     every fold of a branch followed from rest; ``check``'s is the stack of the Jacobians
     J(s_k) of the problems restricted to bending on [0, s_k] (the rod rigid beyond), at
-    s_k = k L / COARSE_STEPS, k = 0 .. COARSE_STEPS - 1, then J(L) = dr/dx: the state is
-    stable iff every det J(s_k) > 0 and, with torsion, J(0)'s angle block has eigenvalues
-    with positive real parts. (The eigenvalues of K^-1 dr/dx, K the
-    rod's own stiffness, are no test: a rod compressed beyond its dead-load buckling load,
-    held by the field, has an indefinite K.) The solver's matrices of the
+    s_k = k L / COARSE_STEPS, k = 0 .. COARSE_STEPS - 1, then J(L) = dr/dx, then the
+    energy's Hessian in the unknowns H = U^T D dr/dx (U the tip pose per unknown;
+    dimensionless). The variations of the restricted problems are nested, so the lowest
+    eigenvalue of the second variation falls with s and a single unstable mode shows as a
+    sign change of det J(s) on (0, L]; H is congruent to the Hessian in tip-pose
+    coordinates, so its eigenvalues count the unstable modes (Sylvester's law of inertia),
+    which catches pairs of modes that turn unstable together (near an axisymmetric
+    magnet). Near a straight rod the axial force and moment are constraint-like and H has
+    eigenvalues near zero there. The state is stable iff every det J(s_k) > 0, H has no
+    eigenvalue below -HESSIAN_TOLERANCE (:mod:`design.equilibrium`) and, with torsion,
+    J(0)'s angle block has eigenvalues with positive real parts. (The eigenvalues of K^-1
+    dr/dx, K the rod's own stiffness, are no test: a rod compressed beyond its dead-load
+    buckling load, held by the field, has an indefinite K.) The solver's matrices of the
     large-deflection rod (``newton``, ``relaxation``, ``descent``) come from a
     COARSE_STEPS integration of the same rod: their relative error, about 1e-5, makes
     Newton converge linearly at that rate and places a fold to that accuracy, for a fifth
@@ -292,15 +302,18 @@ class RingPairModel:
             # The stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the
             # total potential for these (to first order conservative) loads: positive
             # definite iff stable (Sylvester's criterion).
-            gradient_map = ca.diagcat(*stiffness)
-            monitor = monitor_solver = sylvester_minors(gradient_map @ jac)
+            monitor = monitor_solver = sylvester_minors(ca.diagcat(*stiffness) @ jac)
             relaxation = r  # with the loads frozen dr/dx = I
-        # The total potential's gradient and (Gauss-Newton) Hessian in the unknowns, made
-        # dimensionless: unknowns over their scale, energy over EI / L.
-        scale = ca.vertcat(*[length if k < (2 if self.linear_rod else 3) else 1 for k in range(n)])
-        energy_scale = length / ei
-        gradient = energy_scale * scale * (gradient_map @ r)
-        hessian = energy_scale * ca.diag(scale) @ gradient_map @ jac_solver @ ca.diag(scale)
+            # The fall's metric is the elastic stiffness K_s: K_s^-1 (K_s r) = r and
+            # K_s^-1 (K_s dr/dx) = dr/dx. (These loads are conservative to first order
+            # only: the antisymmetric part of K_s dr/dx matters at large tip rotations.)
+            direction, fall_matrix = r, jac
+        if not self.linear_rod:
+            # The fall's metric is Euclidean in the unknowns over their scale, with the
+            # energy over EI / L: P = (L / EI) diag(scale)^2 times the gradient map.
+            scale = ca.vertcat(*[length if k < 3 else 1 for k in range(n)])
+            metric = (length / ei) * ca.diag(scale**2) @ gradient_map
+            direction, fall_matrix = metric @ r, metric @ jac_solver
         clearance = magnet_clearance(s, position, frame)
         # Newton's step and the load tangent share one factorisation.
         newton_solve = ca.solve(jac_solver, ca.horzcat(r, -dr_dload))
@@ -323,9 +336,9 @@ class RingPairModel:
             "descent": ca.Function(
                 "descent",
                 arguments,
-                [gradient, ca.vec(hessian), clearance],
+                [direction, ca.vec(fall_matrix), clearance],
                 io,
-                ["gradient", "hessian", "clearance"],
+                ["direction", "M", "clearance"],
                 opts,
             ),
             "check": ca.Function(
@@ -472,6 +485,19 @@ class RingPairModel:
                 dr_dload = ca.vertcat(dr_dload, -twist * d_loads[6:8, 6])
             return j, k, dr_dload
 
+        def energy_gradient_map(sens: ca.SX, tip: ca.SX) -> ca.SX:
+            """B, with g = B r the total potential's gradient in the unknowns and B dr/dx
+            its Hessian at an equilibrium: the tip's (displacement, spatial rotation) per
+            unknown, transposed, times the wrench imbalance (the rod's elastic energy
+            changes by n(L).dp + m(L).dtheta, the loads' by -f.dp - tau.dtheta), and
+            GJ / L times the twist residual per tip angle."""
+            pose = ca.vertcat(
+                sens[0:3, 0:6],
+                2 * _rotation_rates(tip[3:7]).T @ sens[3:7, 0:6] / ca.dot(tip[3:7], tip[3:7]),
+            ) @ ca.diag(wrench_scale)
+            out = pose.T @ ca.diag(1 / row_scale)
+            return out if twist is None else ca.diagcat(out, ca.diag(1 / twist))
+
         def shoot(steps: int, sensitivities: bool = False, nodes: list | None = None):
             rate = weight_rate if sensitivities else None
             return rod.shoot(base_wrench, length, ei, load * weight_rate, steps, rate, nodes)
@@ -483,29 +509,19 @@ class RingPairModel:
         coarse_nodes: list = []
         coarse_tip, coarse = shoot(COARSE_STEPS, True, coarse_nodes)
         jac_solver, k_solver, dr_dload = derivatives(coarse, loads_derivatives)
-        # The total potential's gradient in the unknowns: the tip's (displacement, spatial
-        # rotation) per unknown, transposed, times the wrench imbalance (the elastic
-        # energy of the rod changes by n(L).dp + m(L).dtheta, the loads' by -f.dp -
-        # tau.dtheta), and (GJ / L) times the twist residual per tip angle.
-        tip_pose = ca.vertcat(
-            coarse[0:3, 0:6],
-            2
-            * _rotation_rates(coarse_tip[3:7]).T
-            @ coarse[3:7, 0:6]
-            / ca.dot(coarse_tip[3:7], coarse_tip[3:7]),
-        ) @ ca.diag(wrench_scale)
-        gradient_map = tip_pose.T @ ca.diag(1 / row_scale)
-        if twist is not None:
-            gradient_map = ca.diagcat(gradient_map, ca.diag(1 / twist))
+        gradient_map = energy_gradient_map(coarse, coarse_tip)
         # The exact dr/dx: sensitivities and loads of one full integration.
         tip_exact, exact = shoot(rod.STEPS, True)
         _, exact_derivatives, exact_loads = at(tip_exact)
         jac = derivatives(exact, exact_derivatives)[0]
         # The stability test: the restricted Jacobians at the coarse integration's nodes,
-        # then dr/dx at the tip (two unstable modes appearing within L / COARSE_STEPS of
-        # each other would go unseen; one never does).
+        # dr/dx at the tip, and the energy's Hessian in the unknowns (see the class).
+        unit = ca.vertcat(length * ca.DM.ones(3), ca.DM.ones(self.n_unknowns - 3))
+        hessian = (length / ei) * ca.diag(unit) @ energy_gradient_map(exact, tip_exact)
         focal = ca.vertcat(
-            restricted(coarse_nodes, tip_exact, exact_derivatives, exact_loads), ca.vec(jac)
+            restricted(coarse_nodes, tip_exact, exact_derivatives, exact_loads),
+            ca.vec(jac),
+            ca.vec(hessian @ jac @ ca.diag(unit)),
         )
         frame = rod.frame_from_quaternion(tip[3:7])
         return r, jac, jac_solver, k_solver, dr_dload, focal, gradient_map, tip[0:3], frame

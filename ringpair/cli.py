@@ -17,6 +17,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from design.atomic import write_text
+from design.branches import branches
 from design.designfile import DesignError, default_design, load_design, save_design
 from design.equilibrium import solve_design
 from design.magnets import cylinder_moment, ring_moment
@@ -247,6 +248,67 @@ def simulate(
             f"[yellow]warning:[/] {n_bad} configuration(s) have no state: " + "; ".join(reasons)
         )
     console.print(f"wrote {out} ({len(rows)} configurations)")
+
+
+@cli.command()
+@click.argument("design", required=False, type=click.Path(path_type=Path))
+@click.option("--theta1", default="0", show_default=True, help="Distal ring angle [deg].")
+@click.option("--theta2", default="0", show_default=True, help="Proximal ring angle [deg].")
+@SIMULATION_EFFECTS_OPTION
+@click.option(
+    "--points", type=click.IntRange(11, 2001), default=201, show_default=True,
+    help="Load factors from 0 to 1.",
+)
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="PNG to write. Default: outputs/<design name>/branch.png.",
+)
+def branch(
+    design: Path | None, theta1: str, theta2: str, effects: str, points: int, out: Path | None
+) -> None:
+    """Branch diagram of DESIGN at one (theta1, theta2): how the state comes about.
+
+    The state is the stable equilibrium the robot reaches as its loads (the field, gravity,
+    the rings' mutual torque) are brought up from zero with the rings held. The picture
+    shows it against the load factor, with its snaps (folds), beside the other equilibria
+    at the same command (found at full load, followed back down until they end), solid
+    where stable and dashed where not.
+    """
+    d = _design(design)
+    model = _model(effects)
+    command = np.deg2rad([_one_angle(theta1, "--theta1"), _one_angle(theta2, "--theta2")])
+    lam = np.linspace(0.0, 1.0, points)
+    with console.status("following the branches (the first run on a machine compiles)"):
+        path_states, others = branches(model, model.parameters(d), command, lam)
+    out = out or Path("outputs") / d.name / "branch.png"
+    title = (
+        f"{d.name}, {model.name} model, theta1 = {np.rad2deg(command[0]):g} deg, "
+        f"theta2 = {np.rad2deg(command[1]):g} deg"
+    )
+    from ringpair.plots import plot_branch_diagram  # matplotlib only when plotting
+
+    plot_branch_diagram(path_states, others, lam, title, out)
+    snaps = np.flatnonzero(np.diff(path_states.snapped.astype(int)) > 0) + 1
+    for k in snaps:
+        console.print(f"the state snaps at load factor {lam[k]:.3f}")
+    end = path_states.position[-1]
+    if path_states.stable[-1]:
+        console.print(
+            f"state at full load: tip ({end[0] * 1e3:.2f}, {end[1] * 1e3:.2f}, "
+            f"{end[2] * 1e3:.2f}) mm; {len(others)} other branch(es) of equilibria"
+        )
+    else:
+        console.print(f"no state at full load: {path_states.failure[-1]}")
+    console.print(f"wrote {out}")
+
+
+def _one_angle(text: str, option: str) -> float:
+    values = _angles(text, option)
+    if values.size != 1:
+        raise UserError(f"{option} takes one angle here; got {values.size}")
+    return float(values[0])
 
 
 @cli.command()

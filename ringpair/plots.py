@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
 from design.atomic import atomic_path  # noqa: E402
+from design.branches import Branch  # noqa: E402
 from design.equilibrium import Equilibria  # noqa: E402
 from design.params import Design  # noqa: E402
 from design.workspace import Workspace  # noqa: E402
@@ -149,3 +150,44 @@ def write_workspace_plots(
     plot_section(ws, paths[2])
     plot_deflection(sweep, ws, paths[3])
     return paths
+
+
+def plot_branch_diagram(
+    path_states: Equilibria, others: list[Branch], load_factors: np.ndarray, title: str,
+    path: Path,
+) -> None:
+    """A branch diagram: tip y, tip z and (with torsion) the rings' relative angle against
+    the load factor; the state the robot reaches as its loads are brought up, snaps
+    marked, beside the other branches (solid where stable, dashed where unstable)."""
+    torsion = not np.allclose(path_states.tip_angles, path_states.command, equal_nan=True)
+    panels = [
+        ("tip y [mm]", lambda s: s.position[:, 1] * MM),
+        ("tip z [mm]", lambda s: s.position[:, 2] * MM),
+    ]
+    if torsion:
+        panels.append(
+            ("theta1 - theta2 at the tip [deg]",
+             lambda s: np.rad2deg(s.tip_angles[:, 0] - s.tip_angles[:, 1])),
+        )
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8))
+    for ax, (label, value) in zip(axes, panels, strict=True):
+        for k, branch in enumerate(others):
+            v = value(branch)
+            for stable, style in ((True, "-"), (False, "--")):
+                ax.plot(
+                    load_factors, np.where(branch.stable == stable, v, np.nan), style,
+                    color="#888888", lw=1.2,
+                    label=("other equilibria, stable" if stable else "unstable")
+                    if k == 0 else None,
+                )
+        v = value(path_states)
+        ax.plot(load_factors, v, "-", color=REACH, lw=2.5, label="the state (load ramp)")
+        snaps = np.flatnonzero(np.diff(path_states.snapped.astype(int)) > 0) + 1
+        ax.plot(load_factors[snaps], v[snaps], "v", color=LOOP, ms=8, label="snap")
+        ax.set_xlabel("load factor (magnet brought up) [-]")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="best")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)

@@ -232,8 +232,9 @@ def linear_state(
     tolerance: float = 1e-12,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The linear rod's state at ``command`` (2,) [rad]: the flow x' = -r followed with
-    error control (scipy's Radau, an implicit Runge-Kutta method, so the trajectory is the
-    flow's and does not jump to another equilibrium) at each step of the load ramp until
+    error control (scipy's LSODA, which switches to implicit BDF steps where the flow is
+    stiff, so the trajectory is the flow's and does not jump to another equilibrium; Radau
+    stalled on some flows) at each step of the load ramp until
     the residual is below 1e-9, then polished by Newton at full load. r = C grad V with C
     the compliance (symmetric positive definite), so the flow goes downhill of the
     potential V and rests only in a minimum, where the real robot comes to rest. Returns
@@ -261,17 +262,23 @@ def linear_state(
         def rested(_t, y, lam=lam):
             return np.log(np.abs(flow(0.0, y, lam)).max() + 1e-300) - np.log(1e-9)
 
-        rested.terminal = True
+        def touching(_t, y):
+            return ring_clearance(design, tip_of(y), tangent_of(y))
+
+        rested.terminal = touching.terminal = True
         if np.abs(flow(0.0, x)).max() > 1e-9:
             atol = 1e-10 * np.where(np.arange(x.size) < 2, rb.length, 1.0)  # [m], [rad]
             sol = solve_ivp(
-                flow, (0.0, 1e6), x, method="Radau", events=rested, rtol=1e-6, atol=atol
+                flow, (0.0, 1e6), x, method="LSODA", events=[rested, touching], rtol=1e-6,
+                atol=atol,
             )
             x = sol.y[:, -1]
+            clearance = min(clearance, touching(0.0, x))
+            if sol.t_events[1].size:  # the rings reached the magnet (contact: the end)
+                return nan[0], nan[1], min(clearance, 0.0)
             # failed, or never came to rest (its own finite-difference noise is ~1e-9)
-            if sol.status < 0 or np.abs(flow(0.0, x)).max() > 1e-7:
-                return nan
-        clearance = min(clearance, ring_clearance(design, tip_of(x), tangent_of(x)))
+            if sol.status < 0 or not np.abs(flow(0.0, x)).max() <= 1e-7:
+                return nan[0], nan[1], clearance
     for _ in range(20):
         r = -flow(0.0, x)
         if np.abs(r).max() < tolerance:
