@@ -10,28 +10,31 @@ samples, calibration and each cross-validation fold, Monte Carlo):
   connected to the unloaded robot by a quasi-static load ramp. The ring angles are held
   and every load (the field, gravity, the rings' mutual torque) is scaled by lambda from 0
   (the straight, unloaded robot) to 1; the branch of equilibria is followed by
-  natural-parameter continuation: a secant predictor, Newton corrections, and a step in
-  lambda accepted only where Newton contracts (each correction at most CONTRACTION of the
-  one before; Deuflhard, *Newton Methods for Nonlinear Problems*, 2004, sec. 5.1) and the
+  natural-parameter continuation: a predictor from the branch's tangent and curvature,
+  Newton corrections, and a step in lambda accepted only where the corrector lands near
+  the prediction and contracts (each correction at most CONTRACTION of the one before;
+  Deuflhard, *Newton Methods for Nonlinear Problems*, 2004, sec. 5.1) and the
   state stays stable. The step grows where Newton converges fast and shrinks where it does
   not. Where the branch ends in a fold (the step falls below MIN_LOAD_STEP: a pull-in
-  towards the magnet, the rings' snap), the robot falls: it is relaxed down its potential
-  along -K^-1 r (K its own elastic stiffness, :class:`design.model.RingPairModel`) into
-  the stable state it reaches, which is flagged ``snapped``, and the ramp goes on from
-  there.
+  towards the magnet, the rings' snap), the robot falls: it goes down its total
+  potential energy from the last state, a little further loaded (:func:`_fall`), into the
+  stable state it reaches, which is flagged ``snapped``, and the ramp goes on from there;
+  a fall that brings the rings to the external magnet ends in NaN (contact is not
+  modelled).
 - **A driven path** (:func:`solve_sequence`): the first command as above, then each
   command from the previous state in sub-steps of at most SUBSTEP, so the robot stays on
   its branch as a real one does; friction play (``hysteresis``) acts on the commands, and
   where the branch ends the robot falls as above (``snapped``).
 
 Never an unstable state as an answer: a returned state is converged (infinity norm of the
-scaled residual below TOLERANCE), stable by the model's check (linear rod: the Sylvester
-minors of the stiffness form; large-deflection rod: every eigenvalue of M = K^-1 dr/dx
-with a positive real part) and clear of the external magnet (contact is not modelled).
-Anything else is NaN, with the reason in ``failure``. On request (``multistable=True``)
-other stable states at the same command are looked for, from the straight robot at full
-load, from the mirror image of the state and, with torsion, from the rings' lags mirrored;
-``multistable`` flags where one is found (a search, so a lower bound on multistability).
+scaled residual below TOLERANCE), stable by the model's exact check (:func:`_stable`:
+linear rod, the Sylvester minors of the Hessian of the total potential; large-deflection
+rod, Jacobi's condition det J(s) > 0 on nested variations and the inertia of the energy's
+Hessian) and clear of the external magnet. Anything else is NaN, with the reason in
+``failure``. On request (``multistable=True``) other stable states at the same command
+are looked for, from the straight robot at full load, from the mirror image of the state
+and, with torsion, from the rings' lags mirrored; ``multistable`` flags where one is found
+(a search, so a lower bound on multistability).
 
 Batches run through compiled CasADi functions mapped over columns; the per-column ramp
 logic is vectorised in numpy. SI units are used for all inputs and outputs.

@@ -22,6 +22,8 @@ MM = 1e3
 REACH = "#1f77b4"
 LOOP = "#d62728"
 NEUTRAL = "#2ca02c"
+FLAT = 1e-6
+"""A panel whose values stay within this of zero on every branch is left out. [mm or deg]"""
 
 
 def _save(fig: plt.Figure, path: Path) -> None:
@@ -169,25 +171,40 @@ def plot_branch_diagram(
             ("theta1 - theta2 at the tip [deg]",
              lambda s: np.rad2deg(s.tip_angles[:, 0] - s.tip_angles[:, 1])),
         )
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8))
-    for ax, (label, value) in zip(axes, panels, strict=True):
-        for k, branch in enumerate(others):
+    # A quantity that stays zero on every branch (a set-up symmetric about the x-y
+    # plane) says nothing: its panel is left out.
+    panels = [
+        p for p in panels
+        if any(np.nanmax(np.abs(p[1](s)), initial=0.0) > FLAT for s in (path_states, *others))
+    ] or panels[:1]
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), squeeze=False)
+    drawn: set[str] = set()
+
+    def label(name: str, values: np.ndarray) -> str | None:
+        """Each legend entry once, and only for what is drawn."""
+        if name in drawn or not np.isfinite(values).any():
+            return None
+        drawn.add(name)
+        return name
+
+    for ax, (ylabel, value) in zip(axes[0], panels, strict=True):
+        for branch in others:
             v = value(branch)
-            for stable, style in ((True, "-"), (False, "--")):
-                ax.plot(
-                    load_factors, np.where(branch.stable == stable, v, np.nan), style,
-                    color="#888888", lw=1.2,
-                    label=("other equilibria, stable" if stable else "unstable")
-                    if k == 0 else None,
-                )
+            for stable, style, name in ((True, "-", "other equilibria, stable"),
+                                        (False, "--", "other equilibria, unstable")):
+                part = np.where(branch.stable == stable, v, np.nan)
+                ax.plot(load_factors, part, style, color="#888888", lw=1.2,
+                        label=label(name, part))
         v = value(path_states)
-        ax.plot(load_factors, v, "-", color=REACH, lw=2.5, label="the state (load ramp)")
+        ax.plot(load_factors, v, "-", color=REACH, lw=2.5,
+                label=label("the state (load ramp)", v))
         snaps = np.flatnonzero(np.diff(path_states.snapped.astype(int)) > 0) + 1
-        ax.plot(load_factors[snaps], v[snaps], "v", color=LOOP, ms=8, label="snap")
+        ax.plot(load_factors[snaps], v[snaps], "v", color=LOOP, ms=8,
+                label=label("snap", v[snaps]))
         ax.set_xlabel("load factor (magnet brought up) [-]")
-        ax.set_ylabel(label)
+        ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, loc="best")
+    axes[0, 0].legend(fontsize=7, loc="best")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     _save(fig, path)
