@@ -10,13 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cad.errors import CadError
-
-MM_PER_M = 1e3
+from design.units import MM
 
 
 def mm(length_m: float) -> float:
     """Convert a length from the design's SI metres to CAD millimetres. [mm]"""
-    return length_m * MM_PER_M
+    return length_m * (1 / MM)  # 1 / MM is exactly 1000.0: x * 1000, rounded once
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,6 @@ returned :class:`~design.params.Design` is in SI. Every bad value raises
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import tomllib
@@ -22,11 +21,8 @@ import tomli_w
 from design.atomic import write_text
 from design.geometry import cylinder_distance
 from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
-
-MM = 1e-3
-MPA = 1e6
-DEG = math.pi / 180
-GRAM = 1e-3
+from design.suggest import did_you_mean
+from design.units import DEG, GRAM, MM, MPA
 
 
 class DesignError(ValueError):
@@ -110,11 +106,6 @@ EXTERNAL_SHAPES = ("cylinder",)
 UNIT_TOLERANCE = 1e-3
 
 
-def _suggest(name: str, candidates: set[str] | list[str]) -> str:
-    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
-
-
 def _number(path: str, value: Any, key: Key) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
@@ -152,7 +143,7 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
     for given in node:
         if given not in keys and given not in subsections and given not in extra:
             allowed = set(keys) | subsections | extra
-            raise DesignError(f"unknown key {name}.{given}{_suggest(given, allowed)}")
+            raise DesignError(f"unknown key {name}.{given}{did_you_mean(given, allowed)}")
     out: dict[str, Any] = {}
     for key in keys.values():
         path = f"{name}.{key.name}"
@@ -194,7 +185,7 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
     """Build a validated :class:`Design` (SI) from a parsed design-file document."""
     for given in doc:
         if given not in TOP_KEYS:
-            raise DesignError(f"unknown key {given}{_suggest(given, TOP_KEYS)}")
+            raise DesignError(f"unknown key {given}{did_you_mean(given, TOP_KEYS)}")
     name = doc.get("name")
     if not isinstance(name, str) or not name.strip():
         raise DesignError(f"name must be a non-empty string; got {name!r}")

@@ -10,3 +10,7 @@ MPA = 1e6
 """One megapascal. [Pa]"""
 DEG = math.pi / 180
 """One degree. [rad]"""
+MM3 = 1e-9
+"""One cubic millimetre. [m^3]"""
+GRAM = 1e-3
+"""One gram. [kg]"""

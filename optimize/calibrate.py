@@ -37,6 +37,7 @@ from scipy.optimize import least_squares
 from design.model import RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
+from design.units import DEG, MM
 from optimize.measurements import Measurements
 from optimize.paper_grid import (
     PAPER_FIELD_GRID,
@@ -81,8 +82,6 @@ __all__ = [
     "two_factor_parameters",
 ]
 
-MM = 1e-3
-DEG = np.pi / 180
 DEFAULT_SIGMA = 1e-3
 """Weight of rows without a sigma when the data give none (the common noise is then
 estimated from the residuals). [m]"""

@@ -58,7 +58,6 @@ from optimize.calibrate import (
 from optimize.measurements import Measurements
 from optimize.profile import Interval, profile_intervals
 
-MM = 1e-3
 BIC_DROP = 10.0
 """Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
 strong evidence)."""

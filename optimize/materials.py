@@ -32,11 +32,12 @@ Sources (one per material, also in each entry's ``source``):
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 
-GPA = 1e9
-MPA = 1e6
+from design.suggest import did_you_mean
+from design.units import MPA
+
+GPA = 1e3 * MPA
 
 
 @dataclass(frozen=True)
@@ -88,8 +89,7 @@ def material(name: str) -> Material:
     try:
         return MATERIALS[name]
     except KeyError:
-        close = difflib.get_close_matches(name, list(MATERIALS), n=1, cutoff=0.5)
-        hint = f"; did you mean '{close[0]}'?" if close else ""
+        hint = did_you_mean(name, MATERIALS, cutoff=0.5)
         raise KeyError(
             f"unknown material {name!r}; expected one of {', '.join(MATERIALS)}{hint}"
         ) from None

@@ -11,7 +11,6 @@ column, what was expected and what was found.
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 import math
 import os
@@ -24,9 +23,8 @@ import numpy as np
 from design.atomic import write_text
 from design.designfile import dumps_design, load_design
 from design.params import Design
-
-MM = 1e-3
-DEG = math.pi / 180
+from design.suggest import did_you_mean
+from design.units import DEG, MM
 
 ANGLE_LIMIT_DEG = 720.0
 """Commanded and tip angles must lie in [-ANGLE_LIMIT_DEG, ANGLE_LIMIT_DEG] (two turns
@@ -145,11 +143,6 @@ def make_measurements(
 # ---------------------------------------------------------------------------- reading
 
 
-def _suggest(name: str, candidates: Sequence[str]) -> str:
-    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
-
-
 def load_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read and check a measured-data CSV (spec/formats.md). [mm, deg] -> SI.
 
@@ -245,7 +238,7 @@ def _check_header(source: str, line: int, header: list[str]) -> None:
             )
         if name not in COLUMNS:
             raise MeasurementError(
-                f"{where}: unknown column '{name}'{_suggest(name, COLUMNS)} "
+                f"{where}: unknown column '{name}'{did_you_mean(name, COLUMNS)} "
                 f"(expected columns: {', '.join(COLUMNS)})"
             )
         if name in seen:

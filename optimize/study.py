@@ -82,7 +82,6 @@ to the larger reach (y against z; 1 is round).
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import tomllib
@@ -94,12 +93,9 @@ from typing import Any
 from design.designfile import DesignError, default_design, load_design
 from design.model import EFFECTS
 from design.params import Design
+from design.suggest import did_you_mean
+from design.units import DEG, MM, MM3, MPA
 from optimize.materials import MATERIALS
-
-MM = 1e-3
-MPA = 1e6
-DEG = math.pi / 180
-MM3 = 1e-9
 
 
 class StudyError(ValueError):
@@ -297,17 +293,12 @@ SOLVER_KEYS: dict[str, tuple[type, float, float]] = {
 HESSIANS = ("limited-memory", "exact")
 
 
-def _suggest(name: str, candidates: Any) -> str:
-    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
-
-
 def _check_keys(path: str, node: Any, allowed: Any) -> dict[str, Any]:
     if not isinstance(node, dict):
         raise StudyError(f"[{path}] must be a table of keys; got {node!r}")
     for given in node:
         if given not in allowed:
-            raise StudyError(f"unknown key {path}.{given}{_suggest(given, allowed)}")
+            raise StudyError(f"unknown key {path}.{given}{did_you_mean(given, allowed)}")
     return node
 
 
@@ -372,7 +363,7 @@ def _effects(value: Any) -> frozenset[str]:
             why = (
                 " (known to the model but not usable in a study)"
                 if n in EFFECTS
-                else _suggest(n, STUDY_EFFECTS)
+                else did_you_mean(n, STUDY_EFFECTS)
             )
             raise StudyError(
                 f"effects must name effects among {', '.join(STUDY_EFFECTS)}; got {n!r}{why}"
@@ -392,7 +383,7 @@ def _objective(value: Any) -> tuple[tuple[str, float], ...]:
         if name not in OBJECTIVES:
             raise StudyError(
                 f"objective must be one of {', '.join(OBJECTIVES)}; got {name!r}"
-                f"{_suggest(name, OBJECTIVES)}"
+                f"{did_you_mean(name, OBJECTIVES)}"
             )
         out.append((name, _number(f"objective.{name}", weight, 0.0, 1e6, "a weight")))
     if not any(w > 0 for _, w in out):
@@ -413,7 +404,7 @@ def _materials(node: Any) -> tuple[tuple[str, ...], tuple[str, ...]]:
             if v not in MATERIALS:
                 raise StudyError(
                     f"materials.{tube} must name materials among {', '.join(MATERIALS)}; "
-                    f"got {v!r}{_suggest(v, MATERIALS)}"
+                    f"got {v!r}{did_you_mean(v, MATERIALS)}"
                 )
         if len(set(value)) != len(value):
             raise StudyError(f"materials.{tube} must not repeat a material; got {value!r}")
@@ -469,7 +460,7 @@ def _pareto(value: Any) -> tuple[ParetoSweep, ...]:
         if against not in PARETO_QUANTITIES:
             raise StudyError(
                 f"{path}.against must be one of {', '.join(PARETO_QUANTITIES)}; got {against!r}"
-                f"{_suggest(str(against), PARETO_QUANTITIES)}"
+                f"{did_you_mean(str(against), PARETO_QUANTITIES)}"
             )
         key, scale, _ = PARETO_QUANTITIES[against]
         other = {"range_mm", "range_mm3"} - {key}

@@ -11,7 +11,6 @@ or is unstable are dropped and counted. SI units are used for all inputs and out
 from __future__ import annotations
 
 import dataclasses
-import difflib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +21,7 @@ from design.equilibrium import Equilibria, solve_sequence
 from design.model import RingPairModel, model_for
 from design.parameters import NAMES, index
 from design.params import Design
+from design.suggest import did_you_mean
 from optimize.measurements import Measurements, make_measurements
 
 VIEWS = ("3d", "top")
@@ -105,9 +105,7 @@ def true_parameters(design: Design, params_override: Mapping[str, float] | None)
     params = RingPairModel.parameters(design)
     for name, value in (params_override or {}).items():
         if name not in NAMES:
-            close = difflib.get_close_matches(name, NAMES, n=1, cutoff=0.6)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise ValueError(f"unknown model parameter {name!r}{hint}")
+            raise ValueError(f"unknown model parameter {name!r}{did_you_mean(name, NAMES)}")
         value = float(value)
         if not np.isfinite(value):
             raise ValueError(f"parameter {name} must be a finite number; got {value!r}")
