@@ -84,7 +84,7 @@ Fitted = tuple[CalibrationResult, bool | Literal["driven"]]
 
 
 @dataclass(frozen=True)
-class Structure:
+class ResidualDependence:
     """Residual dependence on one feature.
 
     feature : what the residuals were regressed on. r2 : fraction of the residual variance
@@ -164,8 +164,8 @@ class Diagnosis:
     baseline: Fit
     final: Fit
     causes: tuple[Cause, ...]
-    structure_before: tuple[Structure, ...]
-    structure_after: tuple[Structure, ...]
+    structure_before: tuple[ResidualDependence, ...]
+    structure_after: tuple[ResidualDependence, ...]
     unexplained: str
     candidates: dict[str, tuple[float, float]] = field(default_factory=dict)
     time_s: float = 0.0
@@ -268,7 +268,7 @@ def features(design: Design, m: Measurements, model_position: np.ndarray) -> dic
 
 def residual_structure(
     residuals: np.ndarray, feature_matrices: dict[str, np.ndarray]
-) -> tuple[Structure, ...]:
+) -> tuple[ResidualDependence, ...]:
     """F-test of the residuals (N, 3; NaN where not measured) against each feature: each
     measured component is regressed on the feature's columns plus an intercept, and the
     sums of squares are pooled over components. Strongest (smallest p) first."""
@@ -291,7 +291,7 @@ def residual_structure(
         if df1 == 0 or df2 == 0 or rss0 == 0:
             continue
         f = ((rss0 - rss1) / df1) / max(rss1 / df2, 1e-300)
-        out.append(Structure(name, 1 - rss1 / rss0, float(stats.f.sf(f, df1, df2))))
+        out.append(ResidualDependence(name, 1 - rss1 / rss0, float(stats.f.sf(f, df1, df2))))
     return tuple(sorted(out, key=lambda s: s.p_value))
 
 
@@ -424,8 +424,8 @@ def _cause(
     name: str,
     before: Fit,
     after: Fit,
-    s0: Sequence[Structure],
-    s1: Sequence[Structure],
+    s0: Sequence[ResidualDependence],
+    s1: Sequence[ResidualDependence],
     final: Fit,
     profiles: Mapping[str, Interval],
 ) -> Cause:
@@ -495,7 +495,7 @@ def diagnose(
     current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, starts=[None], sigma=sigma)
     baseline = current
 
-    def structure(fit: Fit) -> tuple[Structure, ...]:
+    def structure(fit: Fit) -> tuple[ResidualDependence, ...]:
         model = model_for(fit.effects)
         path: Literal["driven"] | bool = "driven" if m.sequence is not None else False
         position = predict(model, fit.calibration.params, m, path).equilibria.position
@@ -507,7 +507,9 @@ def diagnose(
 
     s_base = structure(baseline)
     s_current = s_base
-    accepted_steps: list[tuple[str, Fit, Fit, tuple[Structure, ...], tuple[Structure, ...]]] = []
+    accepted_steps: list[
+        tuple[str, Fit, Fit, tuple[ResidualDependence, ...], tuple[ResidualDependence, ...]]
+    ] = []
     tried: dict[str, tuple[float, float]] = {baseline.name: (baseline.bic(), baseline.cv_rmse_mm)}
     remaining = list(candidates)
     refit_from: set[str] = set()  # candidates whose estimates the current model was refitted from
@@ -606,4 +608,4 @@ def diagnose(
     )
 
 
-__all__ = ["Cause", "Diagnosis", "Fit", "Structure", "diagnose", "residual_structure"]
+__all__ = ["Cause", "Diagnosis", "Fit", "ResidualDependence", "diagnose", "residual_structure"]

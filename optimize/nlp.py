@@ -30,8 +30,8 @@ from optimize.nlp_problem import (
     GROUPS,
     METRICS,
     Core,
+    NlpShape,
     Problem,
-    Structure,
     core,
     problem,
     restoration,
@@ -54,8 +54,8 @@ is nonzero."""
 # ---------------------------------------------------------------------------- evaluation
 
 
-def _structure(study: Study) -> Structure:
-    return Structure(
+def _nlp_shape(study: Study) -> NlpShape:
+    return NlpShape(
         frozenset(study.effects),
         tuple(b.name for b in study.free),
         study.configurations,
@@ -137,7 +137,7 @@ def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np
 
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
     """Forward equilibria of ``design`` at the study's configurations: (core, v, X, eq)."""
-    c = core(_structure(study))
+    c = core(_nlp_shape(study))
     p = parameter_vector(design)
     eq = solve_equilibria(c.model, p, c.commands[0], c.commands[1])
     return c, free_values(study, design), eq.unknowns.T.copy(), eq
@@ -239,7 +239,7 @@ def _parameters(
     study: Study, start: np.ndarray, cat: Material | None, wire: Material | None, norms: _Norms
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(NLP parameter vector, warm-start z, warm-start x~ (n, K'), area sign)."""
-    c = core(_structure(study))
+    c = core(_nlp_shape(study))
     design = design_with(study, start, cat, wire)
     p = parameter_vector(design)
     _, _, x, _ = _forward(study, design)
@@ -302,7 +302,7 @@ def _solve_one(
 ) -> _Attempt:
     names = (cat.name if cat else None, wire.name if wire else None)
     t0 = time.perf_counter()
-    st = _structure(study)
+    st = _nlp_shape(study)
     prob = problem(st, study.max_iterations, study.tolerance, study.hessian)
     c = prob.core
     n, nf, k_all = c.model.n_unknowns, len(st.free), c.commands.shape[1]
@@ -390,7 +390,7 @@ def _conflicts(
 ) -> tuple[float, tuple[Conflict, ...], tuple[str, ...]]:
     """Minimum-violation problem (one slack per group, their sum minimised in the groups'
     file units): the groups whose slack stays > 0, and the free bounds that limit it."""
-    st = _structure(study)
+    st = _nlp_shape(study)
     prob = problem(st, study.max_iterations, study.tolerance, study.hessian)
     solver = restoration(st, max(study.max_iterations, 500), study.hessian)
     c = prob.core
@@ -534,7 +534,7 @@ def solve_study(
     cat_name, wire_name = best.start.materials
     cat = material(cat_name) if cat_name else None
     wire = material(wire_name) if wire_name else None
-    c = core(_structure(study))
+    c = core(_nlp_shape(study))
     states = _states(c, best.g, group_bounds(study, cat, wire, epsilon), best.lam_g)
     active = [s.name for s in states if s.active]
     for b, value in zip(study.free, best.v, strict=True):

@@ -93,8 +93,8 @@ GROUPS: dict[str, tuple[float, str, str]] = {
 
 
 @dataclass(frozen=True)
-class Structure:
-    """What fixes the NLP's shape (one compiled solver per structure)."""
+class NlpShape:
+    """What fixes the NLP's shape: its variables and rows (one compiled solver per shape)."""
 
     effects: frozenset[str]
     free: tuple[str, ...]
@@ -102,11 +102,11 @@ class Structure:
     neutral_configurations: int
 
 
-def commands(structure: Structure) -> np.ndarray:
+def commands(shape: NlpShape) -> np.ndarray:
     """Sampled commands, shape (2, K + 2 K_n): K parallel (the boundary), K_n antiparallel
     (neutral), then K_n with the rings at right angles (theta1 = theta2 + pi/2, where the
     rings' mutual torque, and so the twist, is largest). [rad]"""
-    k, kn = structure.configurations, structure.neutral_configurations
+    k, kn = shape.configurations, shape.neutral_configurations
     phi = 2 * np.pi * np.arange(k) / k
     psi = 2 * np.pi * np.arange(kn) / kn
     return np.vstack(
@@ -147,7 +147,7 @@ class Core:
     ``rows`` lists the constraint group of every row of ``g``.
     """
 
-    structure: Structure
+    shape: NlpShape
     model: RingPairModel
     commands: np.ndarray
     params: ca.Function  # (v, P) -> prm
@@ -158,23 +158,23 @@ class Core:
 
 
 @lru_cache(maxsize=8)
-def core(structure: Structure) -> Core:
-    """Build the metric and constraint expressions of a structure (cached)."""
-    model = RingPairModel(structure.effects)
-    torsion = "torsion" in structure.effects
-    twist_model = None if torsion else RingPairModel(structure.effects | {"torsion"})
-    n, nf = model.n_unknowns, len(structure.free)
-    cmd = commands(structure)
-    k_par, k_all = structure.configurations, cmd.shape[1]
+def core(shape: NlpShape) -> Core:
+    """Build the metric and constraint expressions of a shape (cached)."""
+    model = RingPairModel(shape.effects)
+    torsion = "torsion" in shape.effects
+    twist_model = None if torsion else RingPairModel(shape.effects | {"torsion"})
+    n, nf = model.n_unknowns, len(shape.free)
+    cmd = commands(shape)
+    k_par, k_all = shape.configurations, cmd.shape[1]
     v = ca.SX.sym("v", nf)
     big_x = ca.SX.sym("X", n, k_all)
     base = ca.SX.sym("P", len(NAMES))
-    prm = _params_expression(structure.free, v, base)
+    prm = _params_expression(shape.free, v, base)
     s = Symbols(prm)
     length, ei = s["free_length"], s.bending_rigidity
     rest = ca.vertcat(length, 0, 0)
     gravity = s["load_scale"] * s.rod_mass_per_length * s.gravity
-    w = gravity if "gravity" in structure.effects else ca.SX.zeros(3)
+    w = gravity if "gravity" in shape.effects else ca.SX.zeros(3)
     stiff = cantilever.stiffness(length, ei)
     w_response = cantilever.distributed_load_response(w, length, ei)
 
@@ -201,7 +201,7 @@ def core(structure: Structure) -> Core:
         rows.append(("twist.wire", twist[0]))
         rows.append(("twist.catheter", twist[1]))
         rows.append(("magnet_clearance", magnet_clearance(s, position, frame)))
-        if k_par <= k < k_par + structure.neutral_configurations:
+        if k_par <= k < k_par + shape.neutral_configurations:
             rows.append(("neutral", ca.sqrt(ca.sumsqr(deflection[-1]) + TINY**2)))
     wire = s["wire_outer_diameter"]
     rows += [
@@ -226,7 +226,7 @@ def core(structure: Structure) -> Core:
     )
     reach_y = (ca.mmax(d[0, :]) - ca.mmin(d[0, :])) / 2
     reach_z = (ca.mmax(d[1, :]) - ca.mmin(d[1, :])) / 2
-    neutral = ca.horzcat(*deflection[k_par : k_par + structure.neutral_configurations])
+    neutral = ca.horzcat(*deflection[k_par : k_par + shape.neutral_configurations])
     metrics = ca.vertcat(
         ca.mmin(dist),
         ca.fabs(area_signed),
@@ -255,12 +255,12 @@ def core(structure: Structure) -> Core:
     params = ca.Function("study_params", [v, base], [prm], ["v", "P"], ["params"])
     unknowns = ca.vertcat(v, ca.vec(big_x))
     free_groups = frozenset(g for g, r in rows if ca.depends_on(r, unknowns))
-    return Core(structure, model, cmd, params, evaluate, tuple(g for g, _ in rows), free_groups)
+    return Core(shape, model, cmd, params, evaluate, tuple(g for g, _ in rows), free_groups)
 
 
 @dataclass(frozen=True)
 class Problem:
-    """The NLP of a structure and its IPOPT ``solver``.
+    """The NLP of a shape and its IPOPT ``solver``.
 
     Variables: (z (n_free), x~ (n x (K + 2 K_n), column-major), rho~, t). Parameters:
     (model parameter vector P, unknown scales xs (n), lower and upper bounds of the free
@@ -293,7 +293,7 @@ def _ipopt_options(max_iterations: int, tolerance: float, hessian: str) -> dict[
 def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray, list[str]]:
     """NLP expressions. Variables (z, x~, rho~, t[, slacks]); returns (nlp, row scales of the
     inequality part, group of each inequality row)."""
-    st = c.structure
+    st = c.shape
     n, nf, k_all = c.model.n_unknowns, len(st.free), c.commands.shape[1]
     z = ca.SX.sym("z", nf)
     xt = ca.SX.sym("xt", n, k_all)
@@ -339,12 +339,12 @@ def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray,
 
 @lru_cache(maxsize=8)
 def problem(
-    structure: Structure, max_iterations: int, tolerance: float, hessian: str = "limited-memory"
+    shape: NlpShape, max_iterations: int, tolerance: float, hessian: str = "limited-memory"
 ) -> Problem:
-    """The IPOPT solver of a structure (cached per process). ``hessian``: IPOPT's
+    """The IPOPT solver of a shape (cached per process). ``hessian``: IPOPT's
     ``hessian_approximation``, "exact" (second derivatives of the model) or
     "limited-memory" (L-BFGS from the exact gradients)."""
-    c = core(structure)
+    c = core(shape)
     nlp, row_scale, _ = _symbolic_nlp(c, relaxed=False)
     options = _ipopt_options(max_iterations, tolerance, hessian)
     solver = ca.nlpsol("design_nlp", "ipopt", nlp, options)
@@ -353,9 +353,9 @@ def problem(
 
 @lru_cache(maxsize=8)
 def restoration(
-    structure: Structure, max_iterations: int, hessian: str = "limited-memory"
+    shape: NlpShape, max_iterations: int, hessian: str = "limited-memory"
 ) -> ca.Function:
-    """The minimum-violation NLP of a structure (one slack per constraint group)."""
-    nlp, _, _ = _symbolic_nlp(core(structure), relaxed=True)
+    """The minimum-violation NLP of a shape (one slack per constraint group)."""
+    nlp, _, _ = _symbolic_nlp(core(shape), relaxed=True)
     options = _ipopt_options(max_iterations, 1e-8, hessian)
     return ca.nlpsol("design_restoration", "ipopt", nlp, options)
