@@ -23,6 +23,7 @@ from design.constants import MU0
 from design.cylinder_field import cylinder_field
 from design.designfile import default_design, load_design
 from design.dipole import dipole_field, dipole_field_gradient
+from design.geometry import rest_position
 
 DISTANCES = (0.6, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0, 5.0, 10.0)  # [diameters from the centre]
 ANGLES = (0.0, 45.0, 90.0)  # [deg from the magnetisation axis]
@@ -81,7 +82,7 @@ def main() -> None:
             row += f" | {e_b:12.2%}  {e_g:12.2%}"
         print(row)
 
-    tip = np.array([design.robot.free_length, 0.0, 0.0])  # straight robot, base frame
+    tip = rest_position(design.robot.free_length)  # straight robot, base frame
     offset = tip - np.asarray(magnet.center)
     e_b, e_g, b_abs, g_abs, b_ratio, g_ratio = (float(v) for v in errors(offset))
     cos_angle = abs(offset @ axis) / np.linalg.norm(offset)

@@ -16,12 +16,14 @@ import math
 from dataclasses import dataclass
 
 import cadquery as cq
+import numpy as np
 
 from cad.actuator import Actuator
 from cad.drivetrain import CAP_MM, wire_mount_depth
 from cad.mounting import MountingDims, MountingPieces
 from cad.process import mm
 from cad.solids import cylinder, frame, tube
+from design.geometry import rest_position, ring_centres
 from design.params import Design
 
 Colour = tuple[float, float, float]
@@ -157,29 +159,45 @@ def _actuator_explode(name: str) -> tuple[float, float, float]:
     return (0.0, 0.0, 0.0)
 
 
+def ring_magnet(dims: MountingDims) -> cq.Solid:
+    """A ring magnet in its own frame: on +Z from its proximal face, z = 0. [mm]"""
+    return tube(dims.magnet_outer_diameter, dims.magnet_inner_diameter, 0.0, dims.magnet_length)
+
+
 def tip_locations(
-    dims: MountingDims, free_length_mm: float, theta1_deg: float, theta2_deg: float
+    design: Design, dims: MountingDims, theta1_deg: float, theta2_deg: float
 ) -> dict[str, cq.Location]:
     """Where the tip pieces and rings sit in the base frame (pieces in their own frames).
 
-    The proximal ring's centre is at x = free length; the distal piece's journal end
-    bears on the proximal piece's shoulder; each ring lies at the bottom of its pocket,
-    so the rings' facing faces are ``dims.gap`` apart. A piece's local +X (the ring's
-    north at angle 0) is turned by its angle from +y towards +z about +x. [mm], [deg]
+    The ring centres are the model's (:func:`design.geometry.ring_centres` on the straight
+    robot: the proximal ring at the rest tip, the distal one a centre spacing further).
+    Each ring lies at the bottom of its piece's pocket (the proximal ring under the
+    shoulder, the distal ring a pocket depth, the centre spacing, into its piece), so the
+    distal piece's journal end bears on the shoulder and the rings' facing faces are the
+    gap apart. A piece's local +X (the ring's north at angle 0) is turned by its angle from
+    +y towards +z about +x. [mm], [deg]
     """
     d = dims
+    tangent = np.array([1.0, 0.0, 0.0])
+    proximal, distal = (
+        mm(centre)
+        for centre in ring_centres(
+            rest_position(design.robot.free_length), tangent, design.tip.spacing
+        )
+    )
 
-    def about_x(angle_deg: float, x: float) -> cq.Location:
+    def about_x(angle_deg: float, centre: np.ndarray, offset: float) -> cq.Location:
+        """The frame at ``offset`` along the tangent from a ring centre. [mm]"""
         a = math.radians(angle_deg)
-        return frame((x, 0.0, 0.0), (1, 0, 0), (0, math.cos(a), math.sin(a)))
+        origin = centre + offset * tangent
+        return frame(tuple(origin), tuple(tangent), (0, math.cos(a), math.sin(a)))
 
-    x_p = free_length_mm - d.shoulder_z + d.magnet_length / 2
-    x_d = x_p + d.shoulder_z
+    half = d.magnet_length / 2
     return {
-        "mounting_piece_proximal": about_x(theta2_deg, x_p),
-        "mounting_piece_distal": about_x(theta1_deg, x_d),
-        "ring_magnet_proximal": about_x(theta2_deg, x_p + d.shoulder_z - d.magnet_length),
-        "ring_magnet_distal": about_x(theta1_deg, x_d + d.gap),
+        "mounting_piece_proximal": about_x(theta2_deg, proximal, half - d.shoulder_z),
+        "mounting_piece_distal": about_x(theta1_deg, distal, half - d.pocket_depth_distal),
+        "ring_magnet_proximal": about_x(theta2_deg, proximal, -half),
+        "ring_magnet_distal": about_x(theta1_deg, distal, -half),
     }
 
 
@@ -210,7 +228,6 @@ def build_assembly(
     if theta1_deg is None:
         theta1_deg = theta2_deg + (lo + hi) / 2
     d = mounting.dims
-    L = mm(design.robot.free_length)
 
     to_base = cq.Location(cq.Vector(-lay.nose_x, 0.0, -lay.shaft_height))
     parts: dict[str, Part] = {}
@@ -224,7 +241,7 @@ def build_assembly(
     for name, solid in actuator.parts.items():
         parts[name] = Part(name, solid, counts[name], True, COLOURS[name], DESCRIPTIONS[name])
 
-    tip = tip_locations(d, L, theta1_deg, theta2_deg)
+    tip = tip_locations(design, d, theta1_deg, theta2_deg)
     flip = distal_print_flip(d)
     parts["mounting_piece_proximal"] = Part(
         "mounting_piece_proximal",
@@ -243,9 +260,8 @@ def build_assembly(
         COLOURS["mounting_piece_distal"],
         DESCRIPTIONS["mounting_piece_distal"],
     )
-    ring = tube(d.magnet_outer_diameter, d.magnet_inner_diameter, 0.0, d.magnet_length)
     parts["ring_magnet"] = Part(
-        "ring_magnet", ring, 2, False, COLOURS["ring_magnet"], DESCRIPTIONS["ring_magnet"]
+        "ring_magnet", ring_magnet(d), 2, False, COLOURS["ring_magnet"], DESCRIPTIONS["ring_magnet"]
     )
     explode = {
         "mounting_piece_proximal": (-4.0, 0.0, 0.0),

@@ -186,6 +186,7 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
     port = spec.glue_port_mm if spec.glue_port_mm is not None else process.wall_mm
     rd = spec.glue_relief_depth_mm
 
+    spacing = mm(tip.spacing)  # ring centre to ring centre: the distal pocket's depth
     require(Lm > 0, "tip ring: magnet length", "positive", Lm)
     require(gap >= 0, "tip ring: gap", "zero or positive", gap)
     require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
@@ -278,7 +279,7 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
     )
 
     key_height = spec.key_height_mm
-    journal_length = max(Lm + gap + w, key_height + spec.axial_clearance_mm + w, 0.5 * journal)
+    journal_length = max(spacing + w, key_height + spec.axial_clearance_mm + w, 0.5 * journal)
     sleeve_length = journal_length - spec.axial_clearance_mm
     reservoir_length = port + 0.4
     require(
@@ -315,7 +316,7 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
         proximal_length=shoulder + sleeve_length,
         journal_diameter=journal,
         journal_length=journal_length,
-        pocket_depth_distal=Lm + gap,
+        pocket_depth_distal=spacing,
         wire_bore=wire_bore,
         chamber_diameter=chamber,
         chamber_length=chamber_length,

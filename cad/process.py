@@ -14,7 +14,8 @@ from design.units import MM
 
 
 def mm(length_m: float) -> float:
-    """Convert a length from the design's SI metres to CAD millimetres. [mm]"""
+    """Convert a length (or an array of them) from the design's SI metres to CAD
+    millimetres. [mm]"""
     return length_m * (1 / MM)  # 1 / MM is exactly 1000.0: x * 1000, rounded once
 
 

@@ -19,7 +19,7 @@ import numpy as np
 import tomli_w
 
 from design.atomic import write_text
-from design.geometry import cylinder_distance
+from design.geometry import cylinder_distance, rest_position, ring_centres
 from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 from design.suggest import did_you_mean
 from design.units import DEG, GRAM, MM, MPA
@@ -264,10 +264,12 @@ def _check_clearance(design: Design) -> None:
     """Reject an external magnet that overlaps the straight robot (base to distal ring)."""
     ext = design.external_magnet
     tip = design.tip
-    reach = design.robot.free_length + tip.spacing + tip.magnet_length / 2
-    x = np.linspace(0.0, reach, 4001)
+    proximal, distal = ring_centres(
+        rest_position(design.robot.free_length), np.array([1.0, 0.0, 0.0]), tip.spacing
+    )
+    x = np.linspace(0.0, distal[0] + tip.magnet_length / 2, 4001)
     # The tip rings are the thickest part; the body is the catheter.
-    near_tip = x >= design.robot.free_length - tip.magnet_length / 2
+    near_tip = x >= proximal[0] - tip.magnet_length / 2
     r_body = np.where(
         near_tip, tip.magnet_outer_diameter / 2, design.robot.catheter.outer_diameter / 2
     )

@@ -1,4 +1,10 @@
-"""Geometry of the set-up shared by the model, the NLP and design-file checks.
+"""Geometry of the set-up shared by the model, the NLP, design-file checks, the workspace
+and the CAD: where the rest tip, the rings and the external magnet are, and how far apart.
+
+Base frame: origin at the clamp, +x along the straight robot. The proximal ring's centre
+is the rod tip (s = L); the distal ring's lies one centre spacing (ring length + gap)
+further along the tip tangent. The external magnet's distance is measured from the rest
+tip, so a study moves the magnet along the line from the rest tip through its centre.
 
 Each function takes numbers (numpy arrays, broadcasting over leading axes) or CasADi
 expressions alike. SI units are used for all inputs and outputs.
@@ -40,6 +46,81 @@ def cylinder_distance(offset: Any, axis: Any, radius: Any, half_length: Any) -> 
     outside_axial = np.maximum(np.abs(axial) - half_length, 0.0)
     outside_radial = np.maximum(radial - radius, 0.0)
     return np.hypot(outside_axial, outside_radial)
+
+
+def rest_position(free_length: Any) -> Any:
+    """The unloaded, straight rod's tip (the proximal ring's centre), base frame: (L, 0, 0),
+    shape (3,). [m]"""
+    if _symbolic(free_length):
+        return ca.vertcat(free_length, 0, 0)
+    return np.array([free_length, 0.0, 0.0])
+
+
+def ring_spacing(ring_length: Any, gap: Any) -> Any:
+    """Centre-to-centre distance of the two rings along the tip tangent: ring length plus the
+    face-to-face gap. [m]"""
+    return ring_length + gap
+
+
+def ring_centres(tip_position: Any, tangent: Any, spacing: Any) -> tuple[Any, Any]:
+    """(proximal, distal) ring centres, base frame, shape (3,) each: the proximal ring sits
+    on the rod tip, the distal ring one ``spacing`` further along the unit ``tangent``. [m]"""
+    return tip_position, tip_position + spacing * tangent
+
+
+def ring_clearance(
+    centres: Any,
+    ring_outer_diameter: Any,
+    ring_length: Any,
+    magnet_centre: Any,
+    magnet_axis: Any,
+    magnet_diameter: Any,
+    magnet_length: Any,
+) -> Any:
+    """Clearance of the rings to the external magnet: the least distance of a ring centre to
+    the cylinder (:func:`cylinder_distance`) less the radius of the sphere that holds a ring
+    (:func:`ring_radius`); negative where they may touch. [m]
+
+    centres : the ring centres (e.g. :func:`ring_centres`), each shape (3,). [m]
+    magnet_centre : the magnet's centre, base frame, shape (3,). [m]
+    magnet_axis : unit vector of its axis, shape (3,). [-]
+    """
+    half, radius = magnet_length / 2, magnet_diameter / 2
+    reach = ring_radius(ring_outer_diameter, ring_length)
+    distances = [
+        cylinder_distance(centre - magnet_centre, magnet_axis, radius, half) for centre in centres
+    ]
+    if _symbolic(*distances):
+        nearest = distances[0]
+        for d in distances[1:]:
+            nearest = ca.fmin(nearest, d)
+        return nearest - reach
+    return np.minimum.reduce(distances) - reach
+
+
+def _offset_from_rest(free_length: Any, magnet_centre: Any, symbolic: bool) -> tuple[Any, Any]:
+    """(rest tip, magnet centre less the rest tip), shape (3,) each, CasADi columns when
+    ``symbolic``. [m]"""
+    rest = rest_position(free_length)
+    if symbolic:
+        return ca.vertcat(rest), ca.vertcat(magnet_centre) - ca.vertcat(rest)
+    return rest, np.asarray(magnet_centre, float) - rest
+
+
+def external_distance(free_length: Any, magnet_centre: Any) -> Any:
+    """Distance of the external magnet's centre from the rest tip. [m]"""
+    symbolic = _symbolic(free_length, magnet_centre)
+    _, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
+    return ca.norm_2(offset) if symbolic else float(np.linalg.norm(offset))
+
+
+def magnet_centre_at(free_length: Any, magnet_centre: Any, distance: Any) -> Any:
+    """The external magnet's centre moved along the line from the rest tip through
+    ``magnet_centre`` to ``distance`` from the rest tip, shape (3,). [m]"""
+    symbolic = _symbolic(free_length, magnet_centre, distance)
+    rest, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
+    norm = ca.norm_2(offset) if symbolic else np.linalg.norm(offset)
+    return rest + distance * (offset / norm)
 
 
 def ring_radius(outer_diameter: Any, length: Any) -> Any:

@@ -37,7 +37,7 @@ import numpy as np
 from design import cantilever, rod
 from design.cylinder_field import cylinder_field
 from design.dipole import dipole_field, dipole_field_gradient
-from design.geometry import cylinder_distance, ring_radius
+from design.geometry import ring_centres, ring_clearance, ring_spacing
 from design.magnets import cylinder_moment, ring_moment, ring_volume
 from design.parameters import NAMES, index, parameter_vector
 from design.params import Design
@@ -110,7 +110,7 @@ class Symbols(dict):
         od, idia, h = s["ring_outer_diameter"], s["ring_inner_diameter"], s["ring_length"]
         self.ring_moment = ring_moment(od, idia, h, s["ring_remanence"])
         self.ring_mass = s["ring_density"] * ring_volume(od, idia, h)
-        self.ring_spacing = h + s["ring_gap"]
+        self.ring_spacing = ring_spacing(h, s["ring_gap"])
         axis = ca.vertcat(s["external_axis_x"], s["external_axis_y"], s["external_axis_z"])
         self.external_axis = axis / ca.norm_2(axis)
         self.external_center = ca.vertcat(
@@ -145,17 +145,24 @@ def sylvester_minors(stiffness: ca.SX) -> ca.SX:
     return ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
 
 
+def ring_positions(s: Symbols, position: ca.SX, frame: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(proximal, distal) ring centres of the robot whose rod tip is at ``position`` (3,)
+    with ``frame`` (3, 3), base frame (:func:`design.geometry.ring_centres`). [m]"""
+    return ring_centres(position, frame[:, 0], s.ring_spacing)
+
+
 def magnet_clearance(s: Symbols, position: ca.SX, frame: ca.SX) -> ca.SX:
-    """Clearance of the tip rings to the external magnet: the smaller distance of the two
-    ring centres (the rod tip and one spacing along the tip tangent) to the cylinder, less
-    the radius of the sphere that holds a ring; negative where they touch. [m]"""
-    half, radius = s["external_length"] / 2, s["external_diameter"] / 2
-    reach = ring_radius(s["ring_outer_diameter"], s["ring_length"])
-    distances = [
-        cylinder_distance(centre - s.external_center, s.external_axis, radius, half)
-        for centre in (position, position + s.ring_spacing * frame[:, 0])
-    ]
-    return ca.fmin(*distances) - reach
+    """Clearance of the tip rings to the external magnet
+    (:func:`design.geometry.ring_clearance`); negative where they touch. [m]"""
+    return ring_clearance(
+        ring_positions(s, position, frame),
+        s["ring_outer_diameter"],
+        s["ring_length"],
+        s.external_center,
+        s.external_axis,
+        s["external_diameter"],
+        s["external_length"],
+    )
 
 
 @dataclass(frozen=True)
@@ -566,7 +573,8 @@ class RingPairModel:
 
         tangent = frame[:, 0]
         out = []
-        for i, p in enumerate((position + s.ring_spacing * tangent, position)):
+        proximal, distal = ring_positions(s, position, frame)
+        for i, p in enumerate((distal, proximal)):
             m_i = ring_moment_vector(angles[i], frame, moment)
             out.append(ca.dot(tangent, magnet_torque(field_model(p)[0], m_i)))
         k12 = load**2 * coupling_coefficient(

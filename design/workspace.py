@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from design.equilibrium import Equilibria, solve_equilibria
+from design.geometry import rest_position
 from design.model import RingPairModel
 from design.params import Design
 
@@ -180,5 +181,5 @@ def sweep_workspace(
     loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
     parallel = solve_equilibria(model, params, loop, loop)
     antiparallel = solve_equilibria(model, params, loop + np.pi, loop)
-    rest = np.array([design.robot.free_length, 0.0, 0.0])
+    rest = rest_position(design.robot.free_length)
     return workspace_metrics(grid, parallel, antiparallel, rest)

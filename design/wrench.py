@@ -21,6 +21,8 @@ from collections.abc import Callable
 
 import casadi as ca
 
+from design.geometry import ring_centres
+
 FieldModel = Callable[[ca.SX], tuple[ca.SX, ca.SX]]
 """p (3,) base frame [m] -> (B (3,) [T], dB/dp (3, 3) [T/m])."""
 
@@ -64,11 +66,11 @@ def tip_wrench(
     Returns (force (3,) [N], torque (3,) [N m]), base frame.
     """
     tangent = tip_frame[:, 0]
-    distal = tip_position + ring_spacing * tangent
+    proximal, distal = ring_centres(tip_position, tangent, ring_spacing)
     m1 = ring_moment_vector(angles[0], tip_frame, ring_moment)
     m2 = ring_moment_vector(angles[1], tip_frame, ring_moment)
     b1, g1 = field_model(distal)
-    b2, g2 = field_model(tip_position)
+    b2, g2 = field_model(proximal)
     f1 = magnet_force(g1, m1)
     f2 = magnet_force(g2, m2)
     torque = magnet_torque(b1, m1) + magnet_torque(b2, m2) + ring_spacing * ca.cross(tangent, f1)

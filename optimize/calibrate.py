@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
+from design.geometry import rest_position
 from design.model import RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
@@ -311,7 +312,7 @@ class _Problem:
             np.isfinite(m.tip_angles) & fit[:, None] if tip_angles else np.zeros((len(m), 2), bool)
         )
         self.sigma = sigma
-        rest = np.array([base[index("free_length")], 0.0, 0.0])
+        rest = rest_position(base[index("free_length")])
         # A row without an equilibrium costs what the straight robot would (a plateau the
         # trust region steps back from).
         self.fail_offset = np.where(m.measured, rest - m.position, 0.0)

@@ -41,6 +41,7 @@ from typing import Literal
 import numpy as np
 from scipy import stats
 
+from design.geometry import rest_position
 from design.model import EFFECTS, RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
@@ -244,7 +245,7 @@ def features(design: Design, m: Measurements, model_position: np.ndarray) -> dic
     the distance to the external magnet). [m]
     """
     t1, t2 = m.command[:, 0], m.command[:, 1]
-    rest = np.array([design.robot.free_length, 0.0, 0.0])
+    rest = rest_position(design.robot.free_length)
     centre = np.asarray(design.external_magnet.center)
     order = np.empty(len(m))
     order[m.order()] = np.arange(len(m))

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from design.geometry import external_distance, magnet_centre_at
 from design.parameters import index, parameter_vector
 from design.params import Design
 from optimize.materials import Material, material
@@ -24,8 +25,8 @@ def free_values(study: Study, design: Design) -> np.ndarray:
     out = []
     for b in study.free:
         if b.name == "external_distance":
-            centre = np.asarray(design.external_magnet.center)
-            out.append(float(np.linalg.norm(centre - [design.robot.free_length, 0, 0])))
+            centre = design.external_magnet.center
+            out.append(external_distance(design.robot.free_length, centre))
         else:
             out.append(float(p[index(b.name)]))
     return np.array(out)
@@ -70,10 +71,8 @@ def design_with(
     tip = replace(base.tip, **{f: float(values[k]) for f, k in tip_keys.items() if k in values})
     ext = base.external_magnet
     if "external_distance" in values:
-        rest = np.array([base.robot.free_length, 0.0, 0.0])
-        direction = np.asarray(ext.center) - rest
-        direction /= np.linalg.norm(direction)
-        centre = rest + float(values["external_distance"]) * direction
+        distance = float(values["external_distance"])
+        centre = magnet_centre_at(base.robot.free_length, ext.center, distance)
         ext = replace(ext, center=(float(centre[0]), float(centre[1]), float(centre[2])))
     return replace(
         base,

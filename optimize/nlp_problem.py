@@ -44,6 +44,7 @@ import casadi as ca
 import numpy as np
 
 from design import cantilever
+from design.geometry import external_distance, magnet_centre_at, rest_position
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.parameters import NAMES, index
@@ -119,11 +120,9 @@ def _params_expression(free: tuple[str, ...], v: ca.SX, base: ca.SX) -> ca.SX:
     entries = list(ca.vertsplit(base))
     for i, name in enumerate(free):
         if name == "external_distance":
-            rest = ca.vertcat(entries[index("free_length")], 0, 0)
             ids = [index(f"external_center_{a}") for a in "xyz"]
             centre = ca.vertcat(*[base[j] for j in ids])
-            direction = (centre - rest) / ca.norm_2(centre - rest)
-            new = rest + v[i] * direction
+            new = magnet_centre_at(entries[index("free_length")], centre, v[i])
             for j, jj in enumerate(ids):
                 entries[jj] = new[j]
         else:
@@ -172,7 +171,7 @@ def core(shape: NlpShape) -> Core:
     prm = _params_expression(shape.free, v, base)
     s = Symbols(prm)
     length, ei = s["free_length"], s.bending_rigidity
-    rest = ca.vertcat(length, 0, 0)
+    rest = rest_position(length)
     gravity = s["load_scale"] * s.rod_mass_per_length * s.gravity
     w = gravity if "gravity" in shape.effects else ca.SX.zeros(3)
     stiff = cantilever.stiffness(length, ei)
@@ -213,7 +212,7 @@ def core(shape: NlpShape) -> Core:
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
     volume = 2 * ring_volume(s["ring_outer_diameter"], s["ring_inner_diameter"], s["ring_length"])
-    distance = ca.norm_2(s.external_center - rest)
+    distance = external_distance(length, s.external_center)
     rows += [
         ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
         ("epsilon.external_distance", distance),

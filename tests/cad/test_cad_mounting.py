@@ -166,7 +166,7 @@ def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design) 
     )
 
     def placed(theta1: float) -> dict[str, cq.Shape]:
-        locs = tip_locations(d, 150.0, theta1, 0.0)
+        locs = tip_locations(design, d, theta1, 0.0)
         return {
             "proximal": pieces.proximal.moved(locs["mounting_piece_proximal"]),
             "distal": pieces.distal.moved(locs["mounting_piece_distal"]),

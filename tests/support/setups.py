@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from design.designfile import DesignError, default_design, design_from_dict, design_to_dict
-from design.geometry import cylinder_distance
+from design.geometry import cylinder_distance, rest_position
 from design.params import Design
 
 EFFECT_SETS = tuple(
@@ -82,7 +82,7 @@ def random_design(rng: np.random.Generator, symmetric: bool = False) -> Design:
         ext["center_mm"] = centre
         face = float(
             cylinder_distance(
-                np.array([rest, 0.0, 0.0]) - np.array(centre),
+                rest_position(rest) - np.array(centre),
                 np.array(axis),
                 diameter / 2,
                 length / 2,
@@ -103,7 +103,7 @@ def random_design(rng: np.random.Generator, symmetric: bool = False) -> Design:
 def face_distance(design: Design) -> float:
     """Distance from the rest tip to the external magnet's surface. [m]"""
     ext = design.external_magnet
-    offset = np.array([design.robot.free_length, 0.0, 0.0]) - np.asarray(ext.center)
+    offset = rest_position(design.robot.free_length) - np.asarray(ext.center)
     return float(
         cylinder_distance(offset, np.asarray(ext.magnetization), ext.diameter / 2, ext.length / 2)
     )
