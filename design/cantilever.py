@@ -30,8 +30,10 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from design.frames import rotation_from_vector
+from design.geometry import is_symbolic
 
 
 def tip_pose(coordinates: ca.SX, free_length: Any) -> tuple[ca.SX, ca.SX]:
@@ -47,6 +49,34 @@ def tip_pose(coordinates: ca.SX, free_length: Any) -> tuple[ca.SX, ca.SX]:
     position = ca.vertcat(free_length, coordinates[0], coordinates[1])
     frame = rotation_from_vector(ca.vertcat(0, coordinates[2], coordinates[3]))
     return position, frame
+
+
+def base_moment(
+    tip_force: Any, tip_moment: Any, free_length: Any, load_per_length: Any = None
+) -> Any:
+    """Moment at the clamp of the straight rod (the base moment, M(0) of the derivation)
+    under a tip force f and moment tau (about the tip) and a uniform load w per length:
+        m0 = tau + e1 x (L f + L^2 / 2 w),
+    the tip force's arm L and the load's resultant w L at L / 2. Exact for the straight rod;
+    the linear theory's moment wherever the deflection is small.
+
+    tip_force, tip_moment, load_per_length : base frame, shape (3,); ``load_per_length``
+        None is zero. [N, N m, N/m]
+    free_length : L. [m]
+    Returns m0, base frame, shape (3,): CasADi for CasADi inputs, else numpy. [N m]
+    """
+    symbolic = is_symbolic(tip_force, tip_moment, free_length, load_per_length)
+    if symbolic:
+        tip_moment = ca.vertcat(tip_moment)
+    else:
+        tip_force, tip_moment = np.asarray(tip_force, float), np.asarray(tip_moment, float)
+    lever = free_length * tip_force
+    if load_per_length is not None:
+        load = load_per_length if symbolic else np.asarray(load_per_length, float)
+        lever = lever + free_length**2 / 2 * load
+    if symbolic:
+        return tip_moment + ca.vertcat(0, -lever[2], lever[1])
+    return tip_moment + np.array([0.0, -lever[2], lever[1]])
 
 
 def bending_load(force: ca.SX, torque: ca.SX, tangent: ca.SX) -> ca.SX:

@@ -21,7 +21,8 @@ SMOOTH = 1e-12
 """Floor under square roots of squared lengths, keeping them differentiable at zero. [m]"""
 
 
-def _symbolic(*values: Any) -> bool:
+def is_symbolic(*values: Any) -> bool:
+    """Whether any of ``values`` is a CasADi expression or matrix (else numbers)."""
     return any(isinstance(v, ca.SX | ca.MX | ca.DM) for v in values)
 
 
@@ -34,7 +35,7 @@ def cylinder_distance(offset: Any, axis: Any, radius: Any, half_length: Any) -> 
     The distance is hypot(max(|a| - half_length, 0), max(rho - radius, 0)) with the axial
     and radial coordinates a and rho of the point: exact outside the cylinder.
     """
-    if _symbolic(offset, axis, radius, half_length):
+    if is_symbolic(offset, axis, radius, half_length):
         axial = ca.dot(offset, axis)
         radial = ca.sqrt(ca.fmax(ca.sumsqr(offset) - axial**2, 0) + SMOOTH**2)
         outside_axial = ca.fmax(ca.fabs(axial) - half_length, 0)
@@ -51,7 +52,7 @@ def cylinder_distance(offset: Any, axis: Any, radius: Any, half_length: Any) -> 
 def rest_position(free_length: Any) -> Any:
     """The unloaded, straight rod's tip (the proximal ring's centre), base frame: (L, 0, 0),
     shape (3,). [m]"""
-    if _symbolic(free_length):
+    if is_symbolic(free_length):
         return ca.vertcat(free_length, 0, 0)
     return np.array([free_length, 0.0, 0.0])
 
@@ -90,7 +91,7 @@ def ring_clearance(
     distances = [
         cylinder_distance(centre - magnet_centre, magnet_axis, radius, half) for centre in centres
     ]
-    if _symbolic(*distances):
+    if is_symbolic(*distances):
         nearest = distances[0]
         for d in distances[1:]:
             nearest = ca.fmin(nearest, d)
@@ -109,7 +110,7 @@ def _offset_from_rest(free_length: Any, magnet_centre: Any, symbolic: bool) -> t
 
 def external_distance(free_length: Any, magnet_centre: Any) -> Any:
     """Distance of the external magnet's centre from the rest tip. [m]"""
-    symbolic = _symbolic(free_length, magnet_centre)
+    symbolic = is_symbolic(free_length, magnet_centre)
     _, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
     return ca.norm_2(offset) if symbolic else float(np.linalg.norm(offset))
 
@@ -117,7 +118,7 @@ def external_distance(free_length: Any, magnet_centre: Any) -> Any:
 def magnet_centre_at(free_length: Any, magnet_centre: Any, distance: Any) -> Any:
     """The external magnet's centre moved along the line from the rest tip through
     ``magnet_centre`` to ``distance`` from the rest tip, shape (3,). [m]"""
-    symbolic = _symbolic(free_length, magnet_centre, distance)
+    symbolic = is_symbolic(free_length, magnet_centre, distance)
     rest, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
     norm = ca.norm_2(offset) if symbolic else np.linalg.norm(offset)
     return rest + distance * (offset / norm)
@@ -125,6 +126,6 @@ def magnet_centre_at(free_length: Any, magnet_centre: Any, distance: Any) -> Any
 
 def ring_radius(outer_diameter: Any, length: Any) -> Any:
     """Radius of the sphere that holds a ring (about its centre). [m]"""
-    if _symbolic(outer_diameter, length):
+    if is_symbolic(outer_diameter, length):
         return ca.sqrt((outer_diameter / 2) ** 2 + (length / 2) ** 2)
     return np.hypot(outer_diameter / 2, length / 2)

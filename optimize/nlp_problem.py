@@ -185,10 +185,9 @@ def core(shape: NlpShape) -> Core:
         deflection.append(position - rest)
         # Bending moment at the base and at the tip from the rod's loads Q = K (q - q_w).
         f_y, f_z, t_y, t_z = ca.vertsplit(stiff @ (x[:4] - w_response))
-        base_moment = ca.vertcat(
-            t_y - length * f_z - length**2 / 2 * w[2], t_z + length * f_y + length**2 / 2 * w[1]
-        )
-        for moment in (base_moment, ca.vertcat(t_y, t_z)):
+        force, torque = ca.vertcat(0, f_y, f_z), ca.vertcat(0, t_y, t_z)
+        base_moment = cantilever.base_moment(force, torque, length, w)[1:3]
+        for moment in (base_moment, torque[1:3]):
             curvature = ca.sqrt(ca.sumsqr(moment) + TINY**2) / ei
             rows.append(("strain.catheter", curvature * s["catheter_outer_diameter"] / 2))
             rows.append(("strain.wire", curvature * s["wire_outer_diameter"] / 2))

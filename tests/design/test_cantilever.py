@@ -68,3 +68,16 @@ def test_stiffness_is_the_inverse_compliance():
     np.testing.assert_allclose(k @ c, np.eye(4), atol=1e-12)
     np.testing.assert_allclose(c, c.T)
     assert np.all(np.linalg.eigvalsh(c) > 0)
+
+
+def test_base_moment_balances_the_straight_rod():
+    # Statics of the straight rod: the tip moment, the tip force at (L, 0, 0) and the
+    # distributed load's resultant q L at (L / 2, 0, 0), about the clamp.
+    f, tau, q = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3]), np.array([0.0, -4.0, 5.0])
+    expected = tau + np.cross([0.5, 0, 0], f) + np.cross([0.25, 0, 0], 0.5 * q)
+    np.testing.assert_allclose(cantilever.base_moment(f, tau, 0.5, q), expected, rtol=1e-15)
+    symbolic = cantilever.base_moment(ca.DM(f), ca.DM(tau), 0.5, ca.DM(q))
+    np.testing.assert_allclose(np.asarray(symbolic).ravel(), expected, rtol=1e-15)
+    np.testing.assert_allclose(
+        cantilever.base_moment(f, tau, 0.5), tau + np.cross([0.5, 0, 0], f), rtol=1e-15
+    )
