@@ -23,13 +23,14 @@ Shooting. The unknowns are the base force n0 and moment m0 (the clamp's reaction
 initial value problem is integrated to the tip, and the six boundary conditions form the
 residual, made dimensionless with the rod's own scales:
     r = [ (n(L) - f) L^2 / EI ;  (m(L) - tau) L / EI ].
-On the straight rod the exact base wrench is n0 = f + q L, m0 = tau + L e1 x f
-+ L^2 / 2 e1 x q (:func:`straight_base_wrench`), Newton's starting point.
+On the straight rod the exact base wrench is n0 = f + q L and m0 the straight rod's base
+moment (:func:`design.cantilever.base_moment`).
 
 Use. A model with a pose-dependent tip wrench takes z = (n0, m0) as its unknowns and
 solves ``boundary_residual(z, L, EI, wrench)[0] = 0``, where ``wrench(p, R)`` builds the
-force and moment at the deformed tip on CasADi symbols; :class:`ShootingSolver` does this
-numerically for one configuration (Newton, line search, load continuation).
+force and moment at the deformed tip on CasADi symbols; :mod:`design.model` builds the
+ring pair's residual from the same shooting map (:func:`shoot`) and
+:mod:`design.equilibrium` solves it.
 
 Integration. The frame is a quaternion Q (Hamilton, scalar first), Q' = 1/2 (0, omega) Q;
 the rotation matrix is built from Q / |Q|, so the frame is orthonormal to rounding whatever
@@ -54,29 +55,19 @@ SI units are used for all inputs and outputs.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
 import casadi as ca
-import numpy as np
-from numpy.typing import ArrayLike
-
-from design.compiled import BufferEvaluator, compile_function
 
 STEPS = 20
 """Runge-Kutta steps along the rod (see the module docstring for the convergence)."""
-TOLERANCE = 1e-11
-"""Convergence of the numeric solver: infinity norm of the dimensionless residual. [-]"""
-CONTINUATION_STEPS = (1, 4, 16)
-"""Load steps tried in turn by the numeric solver when full-load Newton fails."""
 
 TipWrench = Callable[[ca.SX, ca.SX], tuple[ca.SX, ca.SX]]
 """(tip position (3,) [m], tip frame (3, 3) [-]) -> (force (3,) [N], moment about the tip
 (3,) [N m]), all in the base frame."""
-LoadedTipWrench = Callable[[ca.SX, ca.SX, ca.SX], tuple[ca.SX, ca.SX]]
-"""As TipWrench, with a third argument: a vector of load parameters."""
 
 
 def frame_from_quaternion(quaternion: ca.SX) -> ca.SX:
@@ -318,30 +309,6 @@ def shooting_function(steps: int = STEPS) -> ca.Function:
     )
 
 
-def _column(value: Any) -> Any:
-    """A CasADi column of ``value`` (symbols stay symbols, numbers become DM)."""
-    if isinstance(value, ca.SX | ca.MX | ca.DM):
-        return value
-    return ca.DM(np.asarray(value, dtype=float).reshape(-1))
-
-
-def straight_base_wrench(
-    tip_force: Any, tip_moment: Any, length: Any, distributed_load: Any = None
-) -> Any:
-    """Base wrench (n0, m0) that balances the loads on the straight rod, shape (6,):
-    n0 = f + q L, m0 = tau + L e1 x f + L^2 / 2 e1 x q. [N, N m]
-
-    Works on CasADi symbols and on numbers alike (a start for Newton, not physics).
-    """
-    e1 = ca.DM([1.0, 0.0, 0.0])
-    f, tau = _column(tip_force), _column(tip_moment)
-    q = ca.DM.zeros(3) if distributed_load is None else _column(distributed_load)
-    return ca.vertcat(
-        f + q * length,
-        tau + length * ca.cross(e1, f) + length**2 / 2 * ca.cross(e1, q),
-    )
-
-
 def boundary_residual(
     base_wrench: ca.SX,
     length: Any,
@@ -368,207 +335,3 @@ def boundary_residual(
         (rod.moment - moment) * (length / bending_rigidity),
     )
     return residual, rod
-
-
-def dead_load(position: ca.SX, frame: ca.SX, load: ca.SX) -> tuple[ca.SX, ca.SX]:
-    """A tip wrench independent of the pose: load = (force (3) [N], moment (3) [N m])."""
-    return load[0:3], load[3:6]
-
-
-@dataclass(frozen=True)
-class RodSolution:
-    """A solved rod (numbers), base frame throughout.
-
-    base_force, base_moment : clamp reaction n(0), m(0), shape (3,). [N, N m]
-    position : tip position, shape (3,). [m]
-    frame : tip frame, columns (tangent, y_tip, z_tip), shape (3, 3). [-]
-    tip_force, tip_moment : n(L), m(L), the applied tip wrench, shape (3,). [N, N m]
-    centreline : p(s_k), s_k = k L / steps, shape (steps + 1, 3). [m]
-    converged : residual below the tolerance.
-    residual : infinity norm of the dimensionless residual. [-]
-    iterations : Newton iterations used in total.
-    """
-
-    base_force: np.ndarray
-    base_moment: np.ndarray
-    position: np.ndarray
-    frame: np.ndarray
-    tip_force: np.ndarray
-    tip_moment: np.ndarray
-    centreline: np.ndarray
-    converged: bool
-    residual: float
-    iterations: int
-
-
-class ShootingSolver:
-    """Numeric Newton solver of the rod's boundary value problem, for tests, benchmarks and
-    single configurations (the model's batch equilibrium uses :func:`boundary_residual`).
-
-    tip_wrench : callable (tip position, tip frame, load) -> (force, moment about the tip),
-        base frame, on CasADi symbols; ``load`` is a parameter vector of ``load_size``.
-        Default :func:`dead_load` (load = (force, moment)).
-    steps : Runge-Kutta steps. [-]
-    compile : compile the residual to C with :func:`design.compiled.compile_function`
-        (seconds once, cached on disk); otherwise CasADi's virtual machine evaluates it.
-
-    Newton from the straight rod's base wrench (evaluated with the wrench at the straight
-    pose), with a backtracking line search on the residual norm. When it fails at full load,
-    the wrench and the distributed load are ramped, lambda = 1/k .. 1, for each k in
-    ``continuation`` in turn.
-    """
-
-    def __init__(
-        self,
-        tip_wrench: LoadedTipWrench = dead_load,
-        load_size: int = 6,
-        steps: int = STEPS,
-        compile: bool = False,
-    ) -> None:
-        self.steps = steps
-        z = ca.SX.sym("base_wrench", 6)
-        lam = ca.SX.sym("load_factor")
-        length, ei = ca.SX.sym("length"), ca.SX.sym("bending_rigidity")
-        q = ca.SX.sym("distributed_load", 3)
-        load = ca.SX.sym("load", load_size)
-
-        def scaled_wrench(position: ca.SX, frame: ca.SX) -> tuple[ca.SX, ca.SX]:
-            force, moment = tip_wrench(position, frame, load)
-            return lam * force, lam * moment
-
-        r, rod = boundary_residual(z, length, ei, scaled_wrench, lam * q, steps)
-        inputs = [z, lam, length, ei, q, load]
-        names = ["base_wrench", "load_factor", "length", "bending_rigidity"]
-        names += ["distributed_load", "load"]
-        residual = ca.Function(
-            "rod_residual", inputs, [r, ca.densify(ca.jacobian(r, z))], names, ["r", "dr_dz"]
-        )
-        straight_wrench = scaled_wrench(ca.vertcat(length, 0, 0), ca.SX.eye(3))
-        straight = ca.Function(
-            "rod_straight",
-            [lam, length, q, load],
-            [ca.densify(straight_base_wrench(*straight_wrench, length, lam * q))],
-        )
-        f, tau = tip_wrench(rod.position, rod.frame, load)
-        shape = ca.Function(
-            "rod_shape",
-            inputs,
-            [ca.densify(e) for e in (r, rod.position, rod.frame, f, tau, rod.centreline)],
-            names,
-            ["r", "position", "frame", "force", "moment", "centreline"],
-        )
-        if compile:
-            residual, straight, shape = (compile_function(fn) for fn in (residual, straight, shape))
-        self._residual = BufferEvaluator(residual)
-        self._straight = BufferEvaluator(straight)
-        self._shape = BufferEvaluator(shape)
-
-    def _newton(
-        self, z: np.ndarray, params: tuple[Any, ...], tolerance: float, max_iterations: int
-    ) -> tuple[np.ndarray, float, int]:
-        r, jac = self._residual(z, *params)
-        norm = float(np.abs(r).max())
-        for iteration in range(max_iterations):
-            if not norm >= tolerance:  # also stops on NaN
-                return z, norm, iteration
-            try:
-                dz = np.linalg.solve(jac, r.ravel())
-            except np.linalg.LinAlgError:
-                return z, np.inf, iteration
-            alpha = 1.0
-            for _ in range(12):
-                z_new = z - alpha * dz
-                r_new, jac_new = self._residual(z_new, *params)
-                norm_new = float(np.abs(r_new).max())
-                if norm_new < norm:
-                    break
-                alpha /= 2
-            else:
-                return z, norm, iteration + 1
-            z, r, jac, norm = z_new, r_new, jac_new, norm_new
-        return z, norm, max_iterations
-
-    def solve(
-        self,
-        length: float,
-        bending_rigidity: float,
-        load: ArrayLike,
-        distributed_load: ArrayLike = (0.0, 0.0, 0.0),
-        *,
-        tolerance: float = TOLERANCE,
-        max_iterations: int = 30,
-        continuation: Sequence[int] = CONTINUATION_STEPS,
-    ) -> RodSolution:
-        """Equilibrium of the rod under ``load`` (see the class) and ``distributed_load``.
-
-        length : L. [m]
-        bending_rigidity : EI. [N m^2]
-        load : tip-wrench parameters, shape (load_size,); for the dead load (force, moment).
-            [N, N m]
-        distributed_load : q, shape (3,), base frame. [N/m]
-        Returns a :class:`RodSolution`; ``converged`` is False (and the last iterate is
-        returned) when no continuation reached the tolerance.
-        """
-        if not continuation:
-            raise ValueError("continuation must name at least one number of load steps, e.g. (1,)")
-        load = np.asarray(load, dtype=float)
-        q = np.asarray(distributed_load, dtype=float)
-        total, norm = 0, np.inf
-        z = np.zeros(6)
-        for k in continuation:
-            z = self._straight(1.0 / k, length, q, load)[0].ravel()
-            for lam in np.arange(1, k + 1) / k:
-                params = (lam, length, bending_rigidity, q, load)
-                z, norm, used = self._newton(z, params, tolerance, max_iterations)
-                total += used
-                if not norm < tolerance:
-                    break
-            if norm < tolerance:
-                break
-        r, position, frame, force, moment, centreline = self._shape(
-            z, 1.0, length, bending_rigidity, q, load
-        )
-        norm = float(np.abs(r).max())
-        return RodSolution(
-            base_force=z[0:3].copy(),
-            base_moment=z[3:6].copy(),
-            position=position.ravel(),
-            frame=frame,
-            tip_force=force.ravel(),
-            tip_moment=moment.ravel(),
-            centreline=centreline.T.copy(),
-            converged=bool(norm < tolerance),
-            residual=norm,
-            iterations=total,
-        )
-
-
-@lru_cache(maxsize=4)
-def _dead_load_solver(steps: int, compile: bool) -> ShootingSolver:
-    return ShootingSolver(dead_load, 6, steps, compile)
-
-
-def solve_tip_load(
-    length: float,
-    bending_rigidity: float,
-    tip_force: ArrayLike = (0.0, 0.0, 0.0),
-    tip_moment: ArrayLike = (0.0, 0.0, 0.0),
-    distributed_load: ArrayLike = (0.0, 0.0, 0.0),
-    *,
-    steps: int = STEPS,
-    compile: bool = False,
-    **options: Any,
-) -> RodSolution:
-    """The clamped rod under a dead tip force and moment and a distributed load.
-
-    length : L. [m]
-    bending_rigidity : EI. [N m^2]
-    tip_force : f at s = L, base frame, shape (3,). [N]
-    tip_moment : tau about the tip, base frame, shape (3,). [N m]
-    distributed_load : q, base frame, shape (3,). [N/m]
-    options : passed to :meth:`ShootingSolver.solve` (tolerance, max_iterations,
-        continuation).
-    """
-    load = np.concatenate([np.asarray(tip_force, float), np.asarray(tip_moment, float)])
-    solver = _dead_load_solver(steps, compile)
-    return solver.solve(length, bending_rigidity, load, distributed_load, **options)
