@@ -124,6 +124,62 @@ def magnet_centre_at(free_length: Any, magnet_centre: Any, distance: Any) -> Any
     return rest + distance * (offset / norm)
 
 
+def segment_distances(loop: Any) -> Any:
+    """Distance from the origin to each side of the closed polygon ``loop`` (vertices in
+    order, shape (S, 2)): side i joins vertex i to vertex i + 1, the last to the first;
+    shape (S,) (CasADi: (S, 1)). [m]
+
+    Each is the distance to the nearest point of the side, min over t in [0, 1] of
+    |a + t (b - a)|: continuously differentiable in the vertices wherever it is not zero
+    (the minimiser is unique), so an NLP can bound it.
+    """
+    if is_symbolic(loop):
+        a = loop
+        ab = ca.vertcat(loop[1:, :], loop[0, :]) - a
+        t = -ca.sum2(a * ab) / ca.fmax(ca.sum2(ab * ab), 1e-300)
+        t = ca.fmin(ca.fmax(t, 0), 1)
+        closest = a + ca.repmat(t, 1, 2) * ab
+        return ca.sqrt(ca.sum2(closest * closest) + SMOOTH**2)
+    a = np.asarray(loop, float)
+    ab = np.roll(a, -1, axis=0) - a
+    t = np.clip(-np.sum(a * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0, 1)
+    return np.linalg.norm(a + t[:, None] * ab, axis=1)
+
+
+def winding_number(loop: Any) -> Any:
+    """How often the closed polygon ``loop`` (S, 2) winds around the origin,
+    counter-clockwise positive: the sum of the angles its sides subtend, over 2 pi. An
+    integer for numbers; for CasADi the sum itself (an integer but where the loop
+    crosses the origin). [-]"""
+    if is_symbolic(loop):
+        a, b = loop, ca.vertcat(loop[1:, :], loop[0, :])
+        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        return ca.sum1(ca.atan2(cross, ca.sum2(a * b))) / (2 * np.pi)
+    a = np.asarray(loop, float)
+    b = np.roll(a, -1, axis=0)
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return int(np.rint(np.sum(np.arctan2(cross, np.sum(a * b, axis=1))) / (2 * np.pi)))
+
+
+def disc_radius(loop: Any) -> Any:
+    """Radius of the largest disc around the origin inside the closed polygon ``loop``
+    (S, 2): the distance to its nearest side (:func:`segment_distances`), 0 when the loop
+    does not wind around the origin or has fewer than three vertices. [m]
+
+    The workspace's metric (the loop of tip deflections with parallel rings, seen along
+    x, about the rest tip); an NLP bounds the smooth :func:`segment_distances` instead.
+    """
+    if is_symbolic(loop):
+        if loop.size1() < 3:
+            return ca.SX(0)
+        winds = ca.fabs(winding_number(loop)) > 0.5
+        return ca.if_else(winds, ca.mmin(segment_distances(loop)), 0)
+    loop = np.asarray(loop, float)
+    if loop.shape[0] < 3 or winding_number(loop) == 0:
+        return 0.0
+    return float(segment_distances(loop).min())
+
+
 def ring_radius(outer_diameter: Any, length: Any) -> Any:
     """Radius of the sphere that holds a ring (about its centre). [m]"""
     if is_symbolic(outer_diameter, length):

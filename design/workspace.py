@@ -9,7 +9,8 @@ place, a small loop around the rest position when the spacing puts the distal ri
 different field). Metrics:
 
 - ``disc_radius``: radius of the largest disc around the rest position (the unloaded,
-  straight tip) inside the outer loop: the distance from the rest position to the loop.
+  straight tip) inside the outer loop: the distance from the rest position to the loop's
+  nearest side (:func:`design.geometry.disc_radius`, the NLP's measure too).
   It measures size and symmetry in one number (an elongated or off-centre workspace has
   a small disc).
 - ``neutral_deflection``: the largest tip deflection with antiparallel rings, i.e. how far
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from design.equilibrium import Equilibria, solve_equilibria
-from design.geometry import rest_position
+from design.geometry import disc_radius, rest_position, winding_number
 from design.model import RingPairModel
 from design.params import Design
 
@@ -85,38 +86,12 @@ class Workspace:
         return int(np.count_nonzero(self.grid.multistable))
 
 
-def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance from each 2-D point (K, 2) to the segments a[i] -> b[i] (S, 2): (K, S)."""
-    ab = b - a
-    ap = points[:, None, :] - a[None, :, :]
-    t = np.clip(np.sum(ap * ab, axis=2) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0, 1)
-    closest = a[None] + t[..., None] * ab[None]
-    return np.linalg.norm(points[:, None, :] - closest, axis=2)
-
-
-def _winding_number(loop: np.ndarray, point: np.ndarray) -> int:
-    """Winding number of the closed 2-D polyline ``loop`` (S, 2) around ``point`` (2,)."""
-    v = loop - point
-    ang = np.arctan2(v[:, 1], v[:, 0])
-    d = np.diff(np.append(ang, ang[0]))
-    d = (d + np.pi) % (2 * np.pi) - np.pi
-    return int(np.rint(d.sum() / (2 * np.pi)))
-
-
 def _loop_radius(loop: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Radius of a star-shaped closed loop (S, 2) around the origin in polar ``angles``."""
     phi = np.arctan2(loop[:, 1], loop[:, 0])
     order = np.argsort(phi)
     phi, r = phi[order], np.linalg.norm(loop, axis=1)[order]
     return np.interp(angles, phi, r, period=2 * np.pi)
-
-
-def disc_radius(loop: np.ndarray) -> float:
-    """Radius of the largest disc around the origin inside the closed loop (S, 2) [m]: the
-    distance to its nearest segment, 0 if the loop does not wind around the origin."""
-    if loop.shape[0] < 3 or _winding_number(loop, np.zeros(2)) == 0:
-        return 0.0
-    return float(_segment_distance(np.zeros((1, 2)), loop, np.roll(loop, -1, axis=0)).min())
 
 
 def workspace_metrics(
@@ -132,10 +107,9 @@ def workspace_metrics(
     stable_theta = grid.command[grid.stable]
     outer_ok = parallel.stable
     outer = (parallel.position[outer_ok] - rest_position)[:, 1:]
-    disc = 0.0
+    disc = disc_radius(outer)
     excess = float("nan")
-    if outer.shape[0] >= 3 and _winding_number(outer, np.zeros(2)) != 0:
-        disc = disc_radius(outer)
+    if outer.shape[0] >= 3 and winding_number(outer) != 0:
         polar = np.arctan2(reach[:, 2], reach[:, 1])
         radial = np.linalg.norm(reach[:, 1:], axis=1)
         excess = float(max(0.0, np.max(radial - _loop_radius(outer, polar))))

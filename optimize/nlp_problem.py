@@ -11,8 +11,10 @@ Formulation (one material combination, one start):
 - Equilibrium: ``RingPairModel.residual(x_k, command_k, params) = 0`` for every k, where
   ``params`` is the base design's parameter vector with the free entries replaced.
 - Objectives (maximised; several are weighted after division by their base-design value):
-  ``disc_radius``: rho <= |p(phi_j) - p_rest| for all j (the largest disc around the rest
-  position inside the parallel loop, measured at its vertices); ``area``: the shoelace
+  ``disc_radius``: rho <= the distance from p_rest to each side of the parallel loop
+  seen along x (:func:`design.geometry.segment_distances`; the largest disc around the
+  rest position inside the loop, :func:`design.geometry.disc_radius`, as the workspace
+  measures it); ``area``: the shoelace
   area of the parallel loop (seen along x); ``reach_ratio``: t <= w_z / w_y and
   t <= w_y / w_z with the y and z widths of the loop (smooth maxima in the NLP, exact
   sample maxima when reported).
@@ -44,7 +46,13 @@ import casadi as ca
 import numpy as np
 
 from design import cantilever
-from design.geometry import external_distance, magnet_centre_at, rest_position
+from design.geometry import (
+    disc_radius,
+    external_distance,
+    magnet_centre_at,
+    rest_position,
+    segment_distances,
+)
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.parameters import NAMES, index
@@ -150,7 +158,7 @@ class Core:
     model: RingPairModel
     commands: np.ndarray
     params: ca.Function  # (v, P) -> prm
-    evaluate: ca.Function  # (v, X, P) -> g, metrics, distances, widths_smooth, area_signed
+    evaluate: ca.Function  # (v, X, P) -> g, metrics, side distances, widths, area_signed
     rows: tuple[str, ...]
     variable_groups: frozenset[str]
     """Groups that depend on the free quantities (the others cannot be active)."""
@@ -219,6 +227,7 @@ def core(shape: NlpShape) -> Core:
     ]
     d = ca.horzcat(*deflection[:k_par])[1:, :]  # (2, K), y and z of the parallel loop
     dist = ca.sqrt(ca.sum1(d * d) + TINY**2).T
+    sides = segment_distances(d.T)
     area_signed = 0.5 * ca.sum2(
         d[0, :] * ca.horzcat(d[1, 1:], d[1, 0]) - ca.horzcat(d[0, 1:], d[0, 0]) * d[1, :]
     )
@@ -226,7 +235,7 @@ def core(shape: NlpShape) -> Core:
     reach_z = (ca.mmax(d[1, :]) - ca.mmin(d[1, :])) / 2
     neutral = ca.horzcat(*deflection[k_par : k_par + shape.neutral_configurations])
     metrics = ca.vertcat(
-        ca.mmin(dist),
+        disc_radius(d.T),
         ca.fabs(area_signed),
         reach_y,
         reach_z,
@@ -245,9 +254,9 @@ def core(shape: NlpShape) -> Core:
     evaluate = ca.Function(
         "study_metrics",
         [v, big_x, base, scale],
-        [ca.vertcat(*[r for _, r in rows]), metrics, dist, widths, area_signed],
+        [ca.vertcat(*[r for _, r in rows]), metrics, sides, widths, area_signed],
         ["v", "X", "P", "scale"],
-        ["g", "metrics", "distances", "widths", "area_signed"],
+        ["g", "metrics", "side_distances", "widths", "area_signed"],
         {"cse": True},
     )
     params = ca.Function("study_params", [v, base], [prm], ["v", "P"], ["params"])
@@ -306,7 +315,7 @@ def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray,
     v = lo + (hi - lo) * z
     big_x = xt * ca.repmat(xs, 1, k_all)
     prm = c.params(v, p_base)
-    g_rows, _, dist, widths, area_signed = c.evaluate(v, big_x, p_base, scale)
+    g_rows, _, sides, widths, area_signed = c.evaluate(v, big_x, p_base, scale)
     rho = rho_t * norms[0]
     equilibrium = []
     for k in range(k_all):
@@ -315,7 +324,7 @@ def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray,
     groups = list(c.rows) + ["min_disc_radius", "min_reach_ratio"]
     row_scale = np.array([GROUPS[g][0] for g in groups])
     ineq = ca.vertcat(g_rows, rho, t) / ca.DM(row_scale)
-    epigraph = ca.vertcat(dist - rho, widths[1] - t * widths[0], widths[0] - t * widths[1]) / scale
+    epigraph = ca.vertcat(sides - rho, widths[1] - t * widths[0], widths[0] - t * widths[1]) / scale
     objective = -(
         weights[0] * rho_t + weights[1] * area_sign * area_signed / norms[1] + weights[2] * t
     )

@@ -11,21 +11,33 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import tomli_w
+from scipy.optimize import minimize_scalar
 from studies import SMALL
 
 from design.constants import MU0
 from design.designfile import default_design, design_to_dict, load_design, save_design
 from design.equilibrium import solve_design
+from design.geometry import disc_radius
 from design.model import RingPairModel
 from design.ring_coupling import coupling_coefficient, coupling_torques
 from design.sections import bending_rigidity, tube_torsional_rigidity
-from design.workspace import sweep_workspace
+from design.workspace import LOOP_SAMPLES, Workspace, sweep_workspace
 from optimize.materials import material
 from optimize.nlp import evaluate_design, pareto_values, solve_study
-from optimize.study import default_study, loads_study
+from optimize.study import Study, default_study, loads_study
 
 L_MM = 150.0
 BETA = math.radians(45.0)
+
+
+def study_disc_radius(ws: Workspace, study: Study) -> float:
+    """The disc radius (design.geometry.disc_radius) of a forward-swept workspace's
+    parallel loop taken at the study's K directions, phi_j = 2 pi j / K (every
+    LOOP_SAMPLES / K-th loop sample), as the NLP measures it. [m]"""
+    every, rest = divmod(LOOP_SAMPLES, study.configurations)
+    assert rest == 0
+    loop = ws.parallel.position[::every] - ws.rest_position
+    return disc_radius(loop[:, 1:])
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +70,50 @@ tolerance = 1e-12
     return loads_study(text, folder=folder)
 
 
+def known_optimum(study: Study):
+    """The known study's optimum by the closed form of
+    :func:`test_distance_maximising_the_disc_radius_closed_form`: (magnet distance [m],
+    disc radius of the K-sample polygon [m], d -> the loop's semi-axes (a_y, a_z) [m])."""
+    design = study.base
+    k = MU0 / (4 * math.pi)
+    ext = design.external_magnet
+    m_e = ext.remanence / MU0 * math.pi / 4 * ext.diameter**2 * ext.length
+    tip = design.tip
+    m = (
+        tip.remanence
+        / MU0
+        * math.pi
+        / 4
+        * (tip.magnet_outer_diameter**2 - tip.magnet_inner_diameter**2)
+        * tip.magnet_length
+    )
+    ei, length = bending_rigidity(design.robot), design.robot.free_length
+
+    def semi_axes(d: float) -> tuple[float, float]:
+        torque = length**2 * math.cos(BETA) / d**3
+        scale = 2 * k * m_e * m / ei  # two rings
+        return (
+            scale * (torque + length**3 * (1 - 3 * math.sin(BETA) ** 2) / d**4),
+            scale * (torque + length**3 / d**4),
+        )
+
+    step = 2 * math.pi / study.configurations
+
+    def polygon_disc(d: float) -> float:
+        a_y, a_z = semi_axes(d)
+        return (
+            a_y
+            * a_z
+            * math.sin(step)
+            / math.hypot(a_y * (1 - math.cos(step)), a_z * math.sin(step))
+        )
+
+    best = minimize_scalar(
+        lambda d: -polygon_disc(d), bounds=(0.1, 0.4), method="bounded", options={"xatol": 1e-13}
+    )
+    return best.x, polygon_disc(best.x), semi_axes
+
+
 @pytest.mark.parametrize("hessian", ["limited-memory", "exact"])
 def test_distance_maximising_the_disc_radius_closed_form(known_study, hessian):
     """Linear dipole baseline, small-load limit. The external dipole m_e sits at distance d
@@ -76,34 +132,22 @@ def test_distance_maximising_the_disc_radius_closed_form(known_study, hessian):
     the disc radius is the smaller, delta_y (sin^2 b > 1/3 makes the force term oppose the
     torque term). d(delta_y)/dd = 0 gives
         d* = 4 L (3 sin^2 b - 1) / (3 cos b),
-    for b = 45 deg: d* = 2 sqrt(2) L / 3 = 141.42136 mm. The model's equilibrium adds
-    corrections of relative size deflection / d ~ 1e-14 and spacing / d ~ 1e-12 here.
+    for b = 45 deg: d* = 2 sqrt(2) L / 3 = 141.42136 mm. The NLP measures the loop by the
+    polygon of its K samples at phi_j = 2 pi j / K (design.geometry.disc_radius): the
+    distance to the sides next to the minor axis' end, a_y a_z sin D / hypot(a_y (1 -
+    cos D), a_z sin D) with D = 2 pi / K, which is largest 5e-5 (relative) short of d*
+    here. The model's equilibrium adds corrections of relative size deflection / d ~ 1e-14
+    and spacing / d ~ 1e-12.
     """
     d_star = 4 * L_MM * (3 * math.sin(BETA) ** 2 - 1) / (3 * math.cos(BETA)) * 1e-3
+    distance, disc, semi_axes = known_optimum(known_study)
+    assert distance == pytest.approx(d_star, rel=1e-4)  # the continuous loop's optimum
     result = solve_study(replace(known_study, hessian=hessian))
     assert result.feasible
     assert all(s.accepted for s in result.starts)
-    assert result.values["external_distance"] == pytest.approx(d_star, rel=1e-6)
-    # The disc radius is the y semi-axis of the closed form at d*.
-    design = known_study.base
-    k = MU0 / (4 * math.pi)
-    ext = design.external_magnet
-    m_e = ext.remanence / MU0 * math.pi / 4 * ext.diameter**2 * ext.length
-    tip = design.tip
-    m = (
-        tip.remanence
-        / MU0
-        * math.pi
-        / 4
-        * (tip.magnet_outer_diameter**2 - tip.magnet_inner_diameter**2)
-        * tip.magnet_length
-    )
-    ei, length = bending_rigidity(design.robot), design.robot.free_length
-    a_y = (2 * k * m_e * m / ei) * (  # two rings
-        length**2 * math.cos(BETA) / d_star**3
-        + length**3 * (1 - 3 * math.sin(BETA) ** 2) / d_star**4
-    )
-    assert result.objective == pytest.approx(a_y, rel=1e-6)
+    assert result.values["external_distance"] == pytest.approx(distance, rel=1e-6)
+    assert result.objective == pytest.approx(disc, rel=1e-6)
+    assert result.objective == pytest.approx(semi_axes(d_star)[0], rel=2e-4)
 
 
 def test_epsilon_bound_moves_the_optimum_onto_it(known_study):
@@ -142,7 +186,9 @@ def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
     first, second = result.starts
     assert not first.accepted and "not finite: external_distance" in first.message
     assert second.accepted and result.feasible
-    assert result.values["external_distance"] == pytest.approx(0.14142136, rel=1e-6)
+    assert result.values["external_distance"] == pytest.approx(
+        known_optimum(known_study)[0], rel=1e-6
+    )
 
     # A start whose solver breaks down is recorded with the error, the others carry on.
     real = nlp._solve_one
@@ -176,11 +222,12 @@ def test_optimum_rechecked_by_forward_simulation_of_its_design_file(tmp_path):
     save_design(result.design, path)
     design = load_design(path)  # the saved file is a valid design file
 
-    # Objective: the workspace's disc radius (720 loop samples, segment distances).
+    # Objective: the workspace's disc radius on the forward loop at the study's directions.
     ws = sweep_workspace(design, np.deg2rad(15.0))
     assert ws.n_without_state == 0 and ws.n_snapped == 0
     assert ws.parallel.stable.all()
-    assert ws.disc_radius == pytest.approx(result.objective, rel=1e-4)
+    assert study_disc_radius(ws, study) == pytest.approx(result.objective, rel=1e-4)
+    assert ws.disc_radius >= result.objective  # 720 loop samples: a finer polygon
     assert ws.disc_radius > 1.05 * sweep_workspace(study.base, np.deg2rad(15.0)).disc_radius
     # Neutral pose (720 antiparallel samples).
     lim = study.limits
@@ -313,7 +360,7 @@ def test_torsion_study_optimum_holds_in_forward_simulation():
     model = RingPairModel(study.effects)
     ws = sweep_workspace(result.design, np.deg2rad(15.0), model=model)
     assert ws.n_without_state == 0 and ws.n_snapped == 0
-    assert ws.disc_radius == pytest.approx(result.objective, rel=1e-4)
+    assert study_disc_radius(ws, study) == pytest.approx(result.objective, rel=1e-4)
     phi = np.deg2rad(np.arange(0.0, 360.0, 15.0))
     for t1 in (phi, phi + np.pi / 2, phi + np.pi):
         eq = solve_design(result.design, t1, phi, model=model)
