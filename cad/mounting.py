@@ -34,6 +34,7 @@ from cad.errors import require
 from cad.process import PrintProcess, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
+from design.geometry import WIRE_CLEARANCE, ring_clears_wire
 from design.params import Design
 
 
@@ -191,9 +192,10 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
     require(gap >= 0, "tip ring: gap", "zero or positive", gap)
     require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
     require(
-        dm > dw,
+        ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter),
         "tip ring: magnet bore",
-        f"larger than the wire diameter ({dw:g} mm) so the wire passes",
+        f"at least the wire diameter ({dw:g} mm) plus {mm(WIRE_CLEARANCE):g} mm so the wire "
+        "turns in it",
         dm,
     )
     require(

@@ -19,7 +19,13 @@ import numpy as np
 import tomli_w
 
 from design.atomic import write_text
-from design.geometry import cylinder_distance, rest_position, ring_centres
+from design.geometry import (
+    WIRE_CLEARANCE,
+    cylinder_distance,
+    rest_position,
+    ring_centres,
+    ring_clears_wire,
+)
 from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 from design.suggest import did_you_mean
 from design.units import DEG, GRAM, MM, MPA
@@ -219,11 +225,11 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
             "tip.magnet_inner_diameter_mm must be smaller than magnet_outer_diameter_mm "
             f"({tip.magnet_outer_diameter / MM:g}); got {tip.magnet_inner_diameter / MM:g}"
         )
-    if tip.magnet_inner_diameter < wire.outer_diameter:
+    if not ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter):
         raise DesignError(
             "tip.magnet_inner_diameter_mm must be at least robot.wire.outer_diameter_mm "
-            f"({wire.outer_diameter / MM:g}) so the ring fits on the wire; "
-            f"got {tip.magnet_inner_diameter / MM:g}"
+            f"({wire.outer_diameter / MM:g}) plus {WIRE_CLEARANCE / MM:g} so the wire turns "
+            f"in the ring; got {tip.magnet_inner_diameter / MM:g}"
         )
 
     e = _section(doc, "external_magnet")

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from design.equilibrium import solve_equilibria
+from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
 from design.parameters import NAMES, parameter_vector
 from design.params import Design
@@ -202,6 +203,7 @@ def _start_points(study: Study, count: int) -> list[np.ndarray]:
     base = np.clip(free_values(study, study.base), lo, hi)
     rng = np.random.default_rng(study.seed)
     names = [b.name for b in study.free]
+    clearance = study.limits.wire_clearance
     out = [base]
     for _ in range(count - 1):
         for _ in range(100):
@@ -212,7 +214,9 @@ def _start_points(study: Study, count: int) -> list[np.ndarray]:
                 d.tip.magnet_inner_diameter < d.tip.magnet_outer_diameter
                 and d.robot.catheter.inner_diameter < d.robot.catheter.outer_diameter
                 and d.robot.wire.outer_diameter < d.robot.catheter.inner_diameter
-                and d.robot.wire.outer_diameter <= d.tip.magnet_inner_diameter
+                and ring_clears_wire(
+                    d.tip.magnet_inner_diameter, d.robot.wire.outer_diameter, clearance
+                )
             )
             if ok:
                 break

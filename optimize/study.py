@@ -45,6 +45,7 @@ wire = ["niti"]                           # absent: the tube keeps the base desi
 max_outer_diameter_mm = 4.0               # rings and catheter; default: the base design's
                                           # largest outer diameter
 wire_clearance_mm = 0.05                  # ring bore and catheter bore >= wire OD + this
+                                          # (0.05 at least: design.geometry.WIRE_CLEARANCE)
 min_wall_mm = 0.1                         # radial wall of rings and catheter
 magnet_clearance_mm = 5.0                 # tip rings to the external magnet's surface, at
                                           # every sampled configuration
@@ -91,6 +92,7 @@ from pathlib import Path
 from typing import Any
 
 from design.designfile import DesignError, default_design, load_design
+from design.geometry import WIRE_CLEARANCE
 from design.model import EFFECTS
 from design.params import Design
 from design.suggest import did_you_mean
@@ -189,7 +191,7 @@ class Constraints:
     """
 
     max_outer_diameter: float
-    wire_clearance: float = 0.05 * MM
+    wire_clearance: float = WIRE_CLEARANCE
     min_wall: float = 0.1 * MM
     magnet_clearance: float = 5.0 * MM
     twist_limit: float = 10.0 * DEG
@@ -271,7 +273,7 @@ TOP_KEYS = (
 CONSTRAINT_KEYS: dict[str, tuple[float, str, float, float]] = {
     # key: (scale, meaning, low, high) in file units
     "max_outer_diameter_mm": (MM, "a diameter [mm]", 0.0, 100.0),
-    "wire_clearance_mm": (MM, "a clearance [mm]", 0.0, 10.0),
+    "wire_clearance_mm": (MM, "a clearance [mm]", WIRE_CLEARANCE / MM, 10.0),
     "min_wall_mm": (MM, "a wall thickness [mm]", 0.0, 10.0),
     "magnet_clearance_mm": (MM, "a clearance [mm]", 0.0, 1000.0),
     "twist_limit_deg": (DEG, "an angle [deg]", 0.0, 180.0),

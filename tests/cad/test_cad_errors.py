@@ -39,6 +39,19 @@ def test_wire_bore_larger_than_the_magnet_bore_is_rejected(demonstrator: Design)
     assert "got 2.05 mm" in msg
 
 
+def test_magnet_bore_without_running_clearance_on_the_wire_is_rejected(
+    demonstrator: Design,
+) -> None:
+    # The demonstrator's wire is 0.4 mm; design.geometry.WIRE_CLEARANCE asks 0.05 mm more.
+    tip = replace(demonstrator.tip, magnet_inner_diameter=0.42e-3)
+    with pytest.raises(CadError) as err:
+        build_mounting_pieces(replace(demonstrator, tip=tip), FDM)
+    msg = str(err.value)
+    assert "tip ring: magnet bore" in msg
+    assert "at least the wire diameter (0.4 mm) plus 0.05 mm" in msg
+    assert "got 0.42 mm" in msg
+
+
 def test_catheter_too_wide_for_the_piece_is_rejected(demonstrator: Design) -> None:
     cath = replace(demonstrator.robot.catheter, outer_diameter=6e-3, inner_diameter=1.0e-3)
     design = replace(demonstrator, robot=replace(demonstrator.robot, catheter=cath))

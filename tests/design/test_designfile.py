@@ -89,6 +89,17 @@ def test_nearly_unit_magnetization_is_normalised(demonstrator_doc):
     assert d.external_magnet.magnetization == (-1.0, 0.0, 0.0)
 
 
+@pytest.mark.parametrize(("bore_mm", "fits"), [(0.45, True), (0.449, False), (0.4, False)])
+def test_ring_bore_must_clear_the_wire_by_the_running_clearance(demonstrator_doc, bore_mm, fits):
+    # The demonstrator's wire is 0.4 mm; the bore needs design.geometry.WIRE_CLEARANCE more.
+    doc = edited(demonstrator_doc, "tip.magnet_inner_diameter_mm", bore_mm)
+    if fits:
+        assert design_from_dict(doc).tip.magnet_inner_diameter == pytest.approx(0.45e-3)
+        return
+    with pytest.raises(DesignError, match=r"robot.wire.outer_diameter_mm \(0.4\) plus 0.05"):
+        design_from_dict(doc)
+
+
 def test_default_design_is_a_fresh_parse():
     assert default_design() == default_design()
 

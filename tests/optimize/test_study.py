@@ -130,6 +130,11 @@ BAD = [
     ),
     (None, "[constraints]\ntwist_limit_deg = -5.0", ["constraints.twist_limit_deg", "-5.0"]),
     (None, "[constraints]\nmax_strain = 0.1", ["unknown key constraints.max_strain"]),
+    (
+        None,
+        "[constraints]\nwire_clearance_mm = 0.01",  # below design.geometry.WIRE_CLEARANCE
+        ["constraints.wire_clearance_mm", "0.05", "0.01"],
+    ),
     (None, "[solver]\nstarts = 0", ["solver.starts must be an integer between 1", "got 0"]),
     (None, "[solver]\nseed = 1.5", ["solver.seed must be an integer", "got 1.5"]),
     (

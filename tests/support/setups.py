@@ -19,8 +19,9 @@ import math
 import numpy as np
 
 from design.designfile import DesignError, default_design, design_from_dict, design_to_dict
-from design.geometry import cylinder_distance, rest_position
+from design.geometry import WIRE_CLEARANCE, cylinder_distance, rest_position
 from design.params import Design
+from design.units import MM
 
 EFFECT_SETS = tuple(
     frozenset(c)
@@ -60,7 +61,7 @@ def random_design(rng: np.random.Generator, symmetric: bool = False) -> Design:
         outer = rng.uniform(1.5, 5.0)
         wire = robot["wire"]["outer_diameter_mm"]
         tip["magnet_outer_diameter_mm"] = outer
-        tip["magnet_inner_diameter_mm"] = rng.uniform(wire + 0.05, outer - 0.4)
+        tip["magnet_inner_diameter_mm"] = rng.uniform(wire + WIRE_CLEARANCE / MM, outer - 0.4)
         tip["magnet_length_mm"] = rng.uniform(0.3, 3.0)
         tip["gap_mm"] = rng.uniform(0.0, 3.0)
         tip["remanence_t"] = rng.uniform(1.2, 1.45)
