@@ -19,13 +19,16 @@ Formulation (one material combination, one start):
   t <= w_y / w_z with the y and z widths of the loop (smooth maxima in the NLP, exact
   sample maxima when reported).
 - Constraints (named groups, reported by name): bending strain at the base and at the tip
-  of the rod (|M| / EI x outer radius, M from the rod's stiffness and its coordinates) of
-  each tube within its material's allowable strain; twist of each transmission
+  of the rod (|M| / EI x outer radius, M from the rod's stiffness and its coordinates,
+  at the base by :func:`design.cantilever.base_moment`) of each tube within its
+  material's allowable strain; twist of each transmission
   (|axial torque| L / GJ, from the ``torsion`` model's own torque expression, or the
   solved tip angles when ``torsion`` is on) within the limit at every configuration;
-  rings on the wire and the wire in the catheter with clearance; walls; the largest outer
-  diameter; clearance of both rings to the external magnet's surface at every
-  configuration; the neutral tip deflection within tolerance; optional lower bounds on
+  rings on the wire and the wire in the catheter with clearance (at least
+  :data:`design.geometry.WIRE_CLEARANCE`); walls; the largest outer diameter; clearance
+  of both rings to the external magnet at every configuration (the model's
+  :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
+  bounding sphere); the neutral tip deflection within tolerance; optional lower bounds on
   disc radius and reach ratio; epsilon bounds (Pareto) on the catheter diameter, the
   magnet distance and the magnet volume. After the solve every sampled equilibrium must
   be the state the robot reaches there (:func:`design.solve_equilibria`: stable and
