@@ -3,127 +3,22 @@ plots and a summary. Millimetres at the edges, SI inside."""
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 from pathlib import Path
 
 import click
-import matplotlib
+import numpy as np
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn  # noqa: E402
-
-from design.atomic import atomic_path, write_text  # noqa: E402
-from design.designfile import save_design  # noqa: E402
-from design.model import RingPairModel  # noqa: E402
-from design.workspace import Workspace, sweep_workspace  # noqa: E402
-from optimize.nlp import StudyResult, solve_study  # noqa: E402
-from optimize.study import Study, StudyError, default_study, load_study  # noqa: E402
-from optimize.sweeps import ParetoPoint, ParetoResult, is_monotone, run_sweeps  # noqa: E402
-
-UNITS = {  # Pareto quantity -> (file-unit factor, label)
-    "catheter_outer_diameter": (1e3, "catheter outer diameter [mm]"),
-    "external_distance": (1e3, "external-magnet distance [mm]"),
-    "magnet_volume": (1e9, "magnet volume, both rings [mm^3]"),
-}
-
-
-def _save(fig: plt.Figure, path: Path) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
-    plt.close(fig)
-
-
-def _objective_mm(study: Study, value: float) -> float:
-    """The objective in report units (mm for a radius; as is otherwise)."""
-    single = len(study.objective) == 1 and study.objective[0][0] == "disc_radius"
-    return value * 1e3 if single else value
-
-
-def pareto_rows(points: tuple[ParetoPoint, ...], study: Study) -> list[dict[str, object]]:
-    """One CSV row per point, in file units."""
-    factor, _ = UNITS[points[0].against] if points else (1.0, "")
-    rows = []
-    for p in points:
-        r = p.result
-        row: dict[str, object] = {
-            "epsilon": p.epsilon * factor,
-            "feasible": p.feasible,
-            "objective": _objective_mm(study, p.objective),
-            "active": ";".join(r.active) if r is not None else "",
-            "error": p.error,
-        }
-        if r is not None and r.feasible:
-            row |= _file_units(r.values)
-        rows.append(row)
-    return rows
-
-
-def _file_units(values: dict[str, float]) -> dict[str, float]:
-    """Design values in file units: moduli in MPa, lengths in mm."""
-    return {
-        (f"{k}_mpa" if k.endswith("modulus") else f"{k}_mm"): v
-        * (1e-6 if k.endswith("modulus") else 1e3)
-        for k, v in values.items()
-    }
-
-
-def write_rows(path: Path, rows: list[dict[str, object]]) -> None:
-    columns = list(dict.fromkeys(k for r in rows for k in r))
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    write_text(path, buf.getvalue())
-
-
-def plot_fronts(pareto: ParetoResult, best: StudyResult, study: Study, path: Path) -> None:
-    """Objective against each swept bound, with the unconstrained optimum marked."""
-    sweeps = [(a, pts) for a, pts in pareto.sweeps.items() if pts]
-    fig, axes = plt.subplots(1, len(sweeps), figsize=(5 * len(sweeps), 3.8), squeeze=False)
-    for ax, (against, pts) in zip(axes[0], sweeps, strict=True):
-        factor, label = UNITS[against]
-        eps = np.array([p.epsilon for p in pts]) * factor
-        obj = np.array([_objective_mm(study, p.objective) for p in pts])
-        ax.plot(eps, obj, "o-", color="tab:blue", label="Pareto front")
-        if best.feasible:
-            ax.plot(
-                best.metrics[against] * factor,
-                _objective_mm(study, best.objective),
-                "r*",
-                ms=14,
-                label="best design",
-            )
-        ax.set_xlabel(label)
-        ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
-        ax.ticklabel_format(axis="y", useOffset=False)
-        ax.set_ylim(bottom=0, top=1.1 * np.nanmax(np.r_[obj, _objective_mm(study, best.objective)]))
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle(f"Pareto fronts of '{study.name}'")
-    _save(fig, path)
-
-
-def plot_workspaces(start: Workspace, best: Workspace, path: Path) -> None:
-    """Starting vs optimised reachable sets seen along x, around each rest position. [mm]"""
-    fig, ax = plt.subplots(figsize=(6.5, 6))
-    for ws, colour, name in ((start, "tab:gray", "starting design"), (best, "tab:blue", "optimum")):
-        pts = (ws.reachable - ws.rest_position) * 1e3
-        ax.scatter(pts[:, 1], pts[:, 2], s=2, color=colour, alpha=0.4)
-        loop = (ws.parallel.position - ws.rest_position) * 1e3
-        ax.plot(loop[:, 1], loop[:, 2], "-", color=colour, lw=1.5, label=name)
-        circle = plt.Circle((0, 0), ws.disc_radius * 1e3, fill=False, ls="--", color=colour)
-        ax.add_patch(circle)
-    ax.set_aspect("equal")
-    ax.set_xlabel("y - y_rest [mm]")
-    ax.set_ylabel("z - z_rest [mm]")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Workspace seen along x: parallel-ring loop and largest disc")
-    _save(fig, path)
+from design.atomic import write_text
+from design.designfile import save_design
+from design.model import RingPairModel
+from design.workspace import Workspace, sweep_workspace
+from optimize.nlp import StudyResult, solve_study
+from optimize.study import Study, StudyError, default_study, load_study
+from optimize.sweeps import is_monotone, run_sweeps
+from ringpair.plots import plot_fronts, plot_workspaces
+from ringpair.tables import pareto_rows, write_rows
 
 
 def summary(

@@ -1,14 +1,17 @@
-"""Workspace pictures (matplotlib, written atomically as PNG). Millimetres and degrees."""
+"""Every figure of ringpair (matplotlib, written atomically as PNG): workspace pictures,
+branch diagrams, Pareto fronts, the tolerance spread and the diagnosis's residuals.
+Millimetres and degrees on the axes; SI in the arguments unless they say otherwise."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402  (the backend is chosen before pyplot loads)
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
@@ -16,9 +19,17 @@ from design.atomic import atomic_path  # noqa: E402
 from design.branches import Branch  # noqa: E402
 from design.equilibrium import Equilibria  # noqa: E402
 from design.params import Design  # noqa: E402
+from design.units import MM  # noqa: E402
 from design.workspace import Workspace  # noqa: E402
+from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E402
 
-MM = 1e3
+if TYPE_CHECKING:
+    from optimize.diagnose import Diagnosis
+    from optimize.measurements import Measurements
+    from optimize.nlp import StudyResult
+    from optimize.study import Study
+    from optimize.sweeps import ParetoResult
+
 REACH = "#1f77b4"
 LOOP = "#d62728"
 NEUTRAL = "#2ca02c"
@@ -26,9 +37,10 @@ FLAT = 1e-6
 """A panel whose values stay within this of zero on every branch is left out. [mm or deg]"""
 
 
-def _save(fig: plt.Figure, path: Path) -> None:
+def _save(fig: plt.Figure, path: Path, dpi: int = 130) -> None:
+    """Write ``fig`` to ``path`` as PNG, atomically, and close it."""
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
+        fig.savefig(tmp, format="png", dpi=dpi, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -41,9 +53,9 @@ def _magnet_outline(ax: plt.Axes, design: Design, axes: tuple[int, int]) -> None
     i, j = axes
     ax.add_patch(
         Rectangle(
-            ((c[i] - half[i]) * MM, (c[j] - half[j]) * MM),
-            2 * half[i] * MM,
-            2 * half[j] * MM,
+            ((c[i] - half[i]) / MM, (c[j] - half[j]) / MM),
+            2 * half[i] / MM,
+            2 * half[j] / MM,
             facecolor="#bbbbbb",
             edgecolor="#555555",
             label="external magnet",
@@ -57,14 +69,14 @@ def plot_projection(
     """Reachable tip positions and the set-up seen on one base-frame plane."""
     names = "xyz"
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    pts = ws.reachable * MM
+    pts = ws.reachable / MM
     i, j = axes
     ax.plot(
-        [0, design.robot.free_length * MM], [0, 0], color="#444444", lw=2, label="straight robot"
+        [0, design.robot.free_length / MM], [0, 0], color="#444444", lw=2, label="straight robot"
     )
     ax.scatter(pts[:, i], pts[:, j], s=3, color=REACH, label="reachable tips")
     _magnet_outline(ax, design, axes)
-    ax.plot(ws.rest_position[i] * MM, ws.rest_position[j] * MM, "k+", ms=12, label="rest")
+    ax.plot(ws.rest_position[i] / MM, ws.rest_position[j] / MM, "k+", ms=12, label="rest")
     ax.set_xlabel(f"{names[i]} [mm]")
     ax.set_ylabel(f"{names[j]} [mm]")
     ax.set_aspect("equal")
@@ -77,13 +89,13 @@ def plot_projection(
 def plot_section(ws: Workspace, path: Path) -> None:
     """The workspace looking along the base x axis: reachable set, loops, disc, maximum."""
     fig, ax = plt.subplots(figsize=(6, 6))
-    pts = (ws.reachable - ws.rest_position) * MM
+    pts = (ws.reachable - ws.rest_position) / MM
     ax.scatter(pts[:, 1], pts[:, 2], s=3, color=REACH, alpha=0.5, label="reachable tips")
     for eq, color, label in (
         (ws.parallel, LOOP, "parallel rings (boundary)"),
         (ws.antiparallel, NEUTRAL, "antiparallel rings (neutral)"),
     ):
-        loop = (eq.position[eq.converged] - ws.rest_position) * MM
+        loop = (eq.position[eq.converged] - ws.rest_position) / MM
         ax.plot(
             np.append(loop[:, 1], loop[:1, 1]),
             np.append(loop[:, 2], loop[:1, 2]),
@@ -94,18 +106,18 @@ def plot_section(ws: Workspace, path: Path) -> None:
     ax.add_patch(
         Circle(
             (0, 0),
-            ws.disc_radius * MM,
+            ws.disc_radius / MM,
             fill=False,
             ls="--",
             color="k",
-            label=f"largest disc, r = {ws.disc_radius * MM:.2f} mm",
+            label=f"largest disc, r = {ws.disc_radius / MM:.2f} mm",
         )
     )
-    tip = ws.max_direction * ws.max_deflection * MM
+    tip = ws.max_direction * ws.max_deflection / MM
     ax.annotate(
         "", xy=(tip[1], tip[2]), xytext=(0, 0), arrowprops={"arrowstyle": "->", "color": "k"}
     )
-    ax.text(tip[1], tip[2], f" max {ws.max_deflection * MM:.2f} mm", fontsize=8)
+    ax.text(tip[1], tip[2], f" max {ws.max_deflection / MM:.2f} mm", fontsize=8)
     ax.set_xlabel("y deflection [mm]")
     ax.set_ylabel("z deflection [mm]")
     ax.set_aspect("equal")
@@ -119,12 +131,12 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     """Deflection against ring angle: theta1 swept with theta2 = 0 (the paper's experiment)
     and the parallel rings (theta1 = theta2) turned together."""
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    d = (sweep.position - ws.rest_position) * MM
+    d = (sweep.position - ws.rest_position) / MM
     t = np.rad2deg(sweep.command[:, 0])
     ax.plot(t, np.linalg.norm(d, axis=1), "k-", lw=2, label="|deflection|, theta2 = 0")
     ax.plot(t, d[:, 1], "-", color=REACH, label="y, theta2 = 0")
     ax.plot(t, d[:, 2], "-", color=NEUTRAL, label="z, theta2 = 0")
-    dp = (ws.parallel.position - ws.rest_position) * MM
+    dp = (ws.parallel.position - ws.rest_position) / MM
     ax.plot(
         np.rad2deg(ws.parallel.command[:, 0]),
         np.linalg.norm(dp, axis=1),
@@ -163,8 +175,8 @@ def plot_branch_diagram(
     marked, beside the other branches (solid where stable, dashed where unstable)."""
     torsion = not np.allclose(path_states.tip_angles, path_states.command, equal_nan=True)
     panels = [
-        ("tip y [mm]", lambda s: s.position[:, 1] * MM),
-        ("tip z [mm]", lambda s: s.position[:, 2] * MM),
+        ("tip y [mm]", lambda s: s.position[:, 1] / MM),
+        ("tip z [mm]", lambda s: s.position[:, 2] / MM),
     ]
     if torsion:
         panels.append(
@@ -208,3 +220,125 @@ def plot_branch_diagram(
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     _save(fig, path)
+
+
+def plot_fronts(pareto: ParetoResult, best: StudyResult, study: Study, path: Path) -> None:
+    """Objective against each swept bound, with the unconstrained optimum marked."""
+    sweeps = [(a, pts) for a, pts in pareto.sweeps.items() if pts]
+    fig, axes = plt.subplots(1, len(sweeps), figsize=(5 * len(sweeps), 3.8), squeeze=False)
+    best_objective = objective_in_report_units(study, best.objective)
+    for ax, (against, pts) in zip(axes[0], sweeps, strict=True):
+        unit, label = PARETO_UNITS[against]
+        eps = np.array([p.epsilon for p in pts]) / unit
+        obj = np.array([objective_in_report_units(study, p.objective) for p in pts])
+        ax.plot(eps, obj, "o-", color="tab:blue", label="Pareto front")
+        if best.feasible:
+            ax.plot(best.metrics[against] / unit, best_objective, "r*", ms=14, label="best design")
+        ax.set_xlabel(label)
+        ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.set_ylim(bottom=0, top=1.1 * np.nanmax(np.r_[obj, best_objective]))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"Pareto fronts of '{study.name}'")
+    _save(fig, path, dpi=120)
+
+
+def plot_workspaces(start: Workspace, best: Workspace, path: Path) -> None:
+    """Starting vs optimised reachable sets seen along x, around each rest position. [mm]"""
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    for ws, colour, name in ((start, "tab:gray", "starting design"), (best, "tab:blue", "optimum")):
+        pts = (ws.reachable - ws.rest_position) / MM
+        ax.scatter(pts[:, 1], pts[:, 2], s=2, color=colour, alpha=0.4)
+        loop = (ws.parallel.position - ws.rest_position) / MM
+        ax.plot(loop[:, 1], loop[:, 2], "-", color=colour, lw=1.5, label=name)
+        circle = plt.Circle((0, 0), ws.disc_radius / MM, fill=False, ls="--", color=colour)
+        ax.add_patch(circle)
+    ax.set_aspect("equal")
+    ax.set_xlabel("y - y_rest [mm]")
+    ax.set_ylabel("z - z_rest [mm]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Workspace seen along x: parallel-ring loop and largest disc")
+    _save(fig, path, dpi=120)
+
+
+def plot_tolerance(radii_mm: np.ndarray, nominal_mm: float, path: Path) -> None:
+    """Histogram of the Monte Carlo samples' disc radius, the nominal design's marked. [mm]"""
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.hist(radii_mm, bins=20, color="tab:blue", alpha=0.8)
+    ax.axvline(nominal_mm, color="r", label="nominal")
+    ax.set_xlabel("disc radius [mm]")
+    ax.set_ylabel("samples")
+    ax.legend()
+    ax.set_title("Tolerance Monte Carlo")
+    _save(fig, path, dpi=110)
+
+
+def _acquisition_rank(m: Measurements) -> np.ndarray:
+    """Each row's place in the acquisition order (0 first)."""
+    rank = np.empty(len(m))
+    rank[m.order()] = np.arange(len(m))
+    return rank
+
+
+def plot_residuals(d: Diagnosis, m: Measurements, path: Path) -> None:
+    """Error per row [mm] against order, theta1 and theta1 - theta2, baseline vs final."""
+    t1 = np.rad2deg(m.command[:, 0])
+    diff = np.rad2deg((m.command[:, 0] - m.command[:, 1] + np.pi) % (2 * np.pi) - np.pi)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6), sharey=True)
+    for ax, x, label in zip(
+        axes,
+        (_acquisition_rank(m), t1, diff),
+        ("acquisition order", "theta1 commanded [deg]", "theta1 - theta2 [deg]"),
+        strict=True,
+    ):
+        for fit, colour, name in (
+            (d.baseline, "tab:red", "baseline"),
+            (d.final, "tab:blue", d.final.name),
+        ):
+            ax.plot(x, fit.calibration.errors / MM, "o", ms=3.5, color=colour, label=name)
+        ax.set_xlabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("tip error [mm]")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Calibrated model against the measurements, per row")
+    _save(fig, path, dpi=110)
+
+
+def plot_positions(d: Diagnosis, m: Measurements, path: Path) -> None:
+    """Measured tips and both models' tips seen along x (the y-z plane, where the robot
+    steers) [mm], each measurement joined to its predictions; for top views (no z), y
+    against the acquisition order."""
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    meas = m.position / MM
+    has_z = np.isfinite(meas[:, 2]).mean() > 0.5
+    order = _acquisition_rank(m)
+    for fit, colour, name in (
+        (d.baseline, "tab:red", "baseline"),
+        (d.final, "tab:blue", d.final.name),
+    ):
+        model = (m.position - fit.calibration.residuals) / MM
+        if has_z:
+            a, b = model[:, 1], model[:, 2]
+            segments_x = np.vstack([meas[:, 1], a, np.full(len(m), np.nan)]).T.ravel()
+            segments_y = np.vstack([meas[:, 2], b, np.full(len(m), np.nan)]).T.ravel()
+            ax.plot(segments_x, segments_y, "-", color=colour, lw=0.8, alpha=0.6)
+        else:
+            a, b = order, model[:, 1]
+        ax.plot(a, b, "x", ms=5, color=colour, label=name)
+    if has_z:
+        ax.plot(meas[:, 1], meas[:, 2], "k.", ms=6, label="measured")
+        ax.set_xlabel("y [mm]")
+        ax.set_ylabel("z [mm]")
+        ax.set_aspect("equal", adjustable="datalim")
+        title = "Tip positions seen along x (base frame), measured to model"
+    else:
+        ax.plot(order, meas[:, 1], "k.", ms=6, label="measured")
+        ax.set_xlabel("acquisition order")
+        ax.set_ylabel("y [mm]")
+        title = "Tip y (top view data), measured and model"
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    _save(fig, path, dpi=110)

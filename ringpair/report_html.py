@@ -3,46 +3,22 @@ with every number the page shows. Millimetres, degrees and mm^3 on the page."""
 
 from __future__ import annotations
 
-import base64
 import html
 import json
 import shutil
 import subprocess
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from design.atomic import atomic_path, write_text  # noqa: E402
-from design.designfile import design_to_dict  # noqa: E402
-from design.model import DEFAULT_EFFECTS  # noqa: E402
-from ringpair.optimize_cli import plot_fronts, plot_workspaces  # noqa: E402
-from ringpair.pipeline import TOLERANCES, Run  # noqa: E402
-from ringpair.plots import plot_projection  # noqa: E402
-
-
-def _save(fig: plt.Figure, path: Path) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-
-
-def _img(path: Path, alt: str) -> str:
-    data = base64.b64encode(path.read_bytes()).decode()
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">'
-
-
-def _table(header: list[str], rows: Sequence[Sequence[object]]) -> str:
-    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
-    )
-    return f"<table><tr>{head}</tr>{body}</table>"
+from design.atomic import atomic_path, write_text
+from design.designfile import design_to_dict
+from design.model import DEFAULT_EFFECTS
+from design.units import MM, MM3
+from ringpair.html_page import img, table
+from ringpair.pipeline import TOLERANCES, Run
+from ringpair.plots import plot_fronts, plot_projection, plot_tolerance, plot_workspaces
 
 
 def _flat(d: dict[str, Any], prefix: str = "") -> dict[str, float]:
@@ -59,16 +35,16 @@ def results(run: Run) -> dict[str, Any]:
     """Every number of the report, in report units (mm, mm^3, deg)."""
     best = run.results["optimise"]
     fwd = run.results["forward"]
-    tol = run.results["tolerance"]["disc_radius"] * 1e3
+    tol = run.results["tolerance"]["disc_radius"] / MM
     start_ws, best_ws = fwd["start"], fwd["best"]
 
     def metrics(m: dict[str, float]) -> dict[str, float]:
         return {
-            "disc_radius_mm": m["disc_radius"] * 1e3,
+            "disc_radius_mm": m["disc_radius"] / MM,
             "reach_ratio": m["reach_ratio"],
-            "neutral_deflection_mm": m["neutral_deflection"] * 1e3,
-            "magnet_volume_mm3": m["magnet_volume"] * 1e9,
-            "external_distance_mm": m["external_distance"] * 1e3,
+            "neutral_deflection_mm": m["neutral_deflection"] / MM,
+            "magnet_volume_mm3": m["magnet_volume"] / MM3,
+            "external_distance_mm": m["external_distance"] / MM,
         }
 
     constraints = {
@@ -84,8 +60,8 @@ def results(run: Run) -> dict[str, Any]:
         "constraints": constraints,
         "forward": {
             "model": sorted(DEFAULT_EFFECTS),
-            "start_disc_radius_mm": start_ws.disc_radius * 1e3,
-            "best_disc_radius_mm": best_ws.disc_radius * 1e3,
+            "start_disc_radius_mm": start_ws.disc_radius / MM,
+            "best_disc_radius_mm": best_ws.disc_radius / MM,
         },
         "tolerance": {
             "samples": int(len(tol)),
@@ -125,15 +101,11 @@ def write_report(run: Run) -> list[Path]:
     if "pareto" in run.results:
         plot_fronts(run.results["pareto"], best, run.study, figs / "pareto.png")
         paths.append(figs / "pareto.png")
-    tol = run.results["tolerance"]["disc_radius"] * 1e3
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    ax.hist(tol, bins=20, color="tab:blue", alpha=0.8)
-    ax.axvline(doc["forward"]["best_disc_radius_mm"], color="r", label="nominal")
-    ax.set_xlabel("disc radius [mm]")
-    ax.set_ylabel("samples")
-    ax.legend()
-    ax.set_title("Tolerance Monte Carlo")
-    _save(fig, figs / "tolerance.png")
+    plot_tolerance(
+        run.results["tolerance"]["disc_radius"] / MM,
+        doc["forward"]["best_disc_radius_mm"],
+        figs / "tolerance.png",
+    )
     paths.append(figs / "tolerance.png")
 
     start_d = _flat(design_to_dict(run.study.base))
@@ -189,7 +161,7 @@ def write_report(run: Run) -> list[Path]:
     timing_rows = [[k, f"{v:.1f}"] for k, v in run.seconds.items()]
     intro = run.study.description.strip()
     intro = intro if not intro or intro.endswith((".", "!", "?")) else intro + "."
-    img = {p.stem: _img(p, p.stem) for p in paths}
+    images = {p.stem: img(p, p.stem) for p in paths}
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>ringpair study {html.escape(run.study.name)}</title>
 <style>body{{font-family:sans-serif;max-width:1150px;margin:2em auto;color:#222}}
@@ -201,31 +173,31 @@ th{{background:#eee}}img{{max-width:100%;margin:4px 0}}.row{{display:flex;gap:8p
 <p>{html.escape(intro)} Study model: {", ".join(doc["model"])}; materials of
 the optimum: {", ".join(str(m) for m in doc["materials"])}.</p>
 <h2 id="designs">Starting vs optimised design</h2>
-{_table(["metric", "start", "optimum"], m_rows)}
+{table(["metric", "start", "optimum"], m_rows)}
 <h3>Parameters that changed (file units)</h3>
-{_table(["key", "start", "optimum"], param_rows)}
+{table(["key", "start", "optimum"], param_rows)}
 <h3>Constraints at the optimum</h3>
-{_table(["constraint", "value", "limit", "unit"], c_rows)}
-<div class="row">{img["start_top"]}{img["best_top"]}</div>
-<div class="row">{img["best_side"]}{img["workspace_section"]}</div>
+{table(["constraint", "value", "limit", "unit"], c_rows)}
+<div class="row">{images["start_top"]}{images["best_top"]}</div>
+<div class="row">{images["best_side"]}{images["workspace_section"]}</div>
 <h2 id="pareto">Pareto fronts</h2>
-{img.get("pareto", "<p>No sweeps in this study.</p>")}
+{images.get("pareto", "<p>No sweeps in this study.</p>")}
 <h2 id="tolerance">Tolerance spread</h2>
 <p>{t["samples"]} samples: disc radius {t["disc_radius_mean_mm"]:.3f} mm mean,
 {t["disc_radius_std_mm"]:.3f} mm standard deviation, 5-95 % range
 {t["disc_radius_p05_mm"]:.3f}-{t["disc_radius_p95_mm"]:.3f} mm.</p>
-{_img(figs / "tolerance.png", "tolerance")}
-{_table(["parameter", "one sigma (SI or relative)", "kind"], tol_rows)}
+{img(figs / "tolerance.png", "tolerance")}
+{table(["parameter", "one sigma (SI or relative)", "kind"], tol_rows)}
 <h2 id="parts">Parts and printability</h2>
 <p>Checks {"all passed" if cad["passed"] else "NOT all passed"} ({len(cad["checks"])}).</p>
-<div class="row">{"".join(_img(p, p.stem) for p in renders[:2])}</div>
-{_table(["item", "check", "value", "limit", "passed"], check_rows)}
+<div class="row">{"".join(img(p, p.stem) for p in renders[:2])}</div>
+{table(["item", "check", "value", "limit", "passed"], check_rows)}
 <h2 id="effects">Model effects (tip shift against the baseline, mm)</h2>
-{_table(["effect", "max shift", "RMS shift"], eff_rows)}
+{table(["effect", "max shift", "RMS shift"], eff_rows)}
 <h2 id="diagnosis">Diagnosis of measured data</h2>
 {diagnosis}
 <h2 id="timings">Timings (s)</h2>
-{_table(["stage", "seconds"], timing_rows)}
+{table(["stage", "seconds"], timing_rows)}
 </body></html>
 """
     write_text(out / "report.html", page)

@@ -1,15 +1,23 @@
-"""CSV tables of simulated tip poses (columns named as in spec/formats.md)."""
+"""Tables of results and their CSV files: simulated tip poses (columns named as in
+spec/formats.md) and the Pareto points. File units (mm, deg, MPa)."""
 
 from __future__ import annotations
 
 import csv
 import io
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from design.atomic import write_text
 from design.equilibrium import Equilibria
+from design.units import MM, MM3, MPA
+
+if TYPE_CHECKING:
+    from optimize.study import Study
+    from optimize.sweeps import ParetoPoint
 
 POSE_COLUMNS = (
     "theta1_deg",
@@ -37,9 +45,9 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
     rows = []
     commanded_deg = np.rad2deg(eq.command)
     tip_deg = np.rad2deg(eq.tip_angles)
-    deflection = np.linalg.norm(eq.position - rest, axis=1) * 1e3
+    deflection = np.linalg.norm(eq.position - rest, axis=1) / MM
     for k in range(len(eq)):
-        p, t = eq.position[k] * 1e3, eq.tangent[k]
+        p, t = eq.position[k] / MM, eq.tangent[k]
         rows.append(
             {
                 "theta1_deg": float(commanded_deg[k, 0]),
@@ -66,15 +74,9 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
 def write_csv(
     path: str | os.PathLike[str], rows: list[dict], columns: tuple[str, ...], header: str = ""
 ) -> None:
-    """Write rows atomically; floats with 9 significant digits, NaN as an empty cell."""
-    buf = io.StringIO()
-    for line in header.splitlines():
-        buf.write(f"# {line}\n")
-    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({k: _cell(row[k]) for k in columns})
-    write_text(path, buf.getvalue())
+    """Write rows atomically under ``header`` (as # lines); floats with 9 significant
+    digits, NaN as an empty cell, booleans as true/false."""
+    _write(path, [{k: _cell(row[k]) for k in columns} for row in rows], columns, header)
 
 
 def _cell(value: object) -> str:
@@ -83,3 +85,62 @@ def _cell(value: object) -> str:
     if isinstance(value, float | np.floating):
         return "" if not np.isfinite(value) else f"{float(value):.9g}"
     return str(value)
+
+
+PARETO_UNITS = {
+    "catheter_outer_diameter": (MM, "catheter outer diameter [mm]"),
+    "external_distance": (MM, "external-magnet distance [mm]"),
+    "magnet_volume": (MM3, "magnet volume, both rings [mm^3]"),
+}
+"""Swept Pareto quantity -> (its unit in SI, axis label): divide an SI value by the unit."""
+
+
+def objective_in_report_units(study: Study, value: float) -> float:
+    """The study's objective in report units (mm for the disc radius; as is otherwise)."""
+    single = len(study.objective) == 1 and study.objective[0][0] == "disc_radius"
+    return value / MM if single else value
+
+
+def pareto_rows(points: tuple[ParetoPoint, ...], study: Study) -> list[dict[str, object]]:
+    """One CSV row per Pareto point, in file units."""
+    unit, _ = PARETO_UNITS[points[0].against] if points else (1.0, "")
+    rows = []
+    for p in points:
+        r = p.result
+        row: dict[str, object] = {
+            "epsilon": p.epsilon / unit,
+            "feasible": p.feasible,
+            "objective": objective_in_report_units(study, p.objective),
+            "active": ";".join(r.active) if r is not None else "",
+            "error": p.error,
+        }
+        if r is not None and r.feasible:
+            row |= _file_units(r.values)
+        rows.append(row)
+    return rows
+
+
+def _file_units(values: dict[str, float]) -> dict[str, float]:
+    """Design values in file units: moduli in MPa, lengths in mm."""
+    return {
+        (f"{k}_mpa" if k.endswith("modulus") else f"{k}_mm"): v
+        / (MPA if k.endswith("modulus") else MM)
+        for k, v in values.items()
+    }
+
+
+def write_rows(path: str | os.PathLike[str], rows: list[dict[str, object]]) -> None:
+    """Write rows atomically as they are (Python's str of each cell), every key a column."""
+    _write(path, rows, list(dict.fromkeys(k for r in rows for k in r)))
+
+
+def _write(
+    path: str | os.PathLike[str], rows: list[dict], columns: Sequence[str], header: str = ""
+) -> None:
+    buf = io.StringIO()
+    for line in header.splitlines():
+        buf.write(f"# {line}\n")
+    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text(path, buf.getvalue())
