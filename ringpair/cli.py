@@ -21,12 +21,12 @@ from design.branches import branches
 from design.designfile import DesignError, default_design, load_design, save_design
 from design.equilibrium import solve_design
 from design.magnets import cylinder_moment, ring_moment
-from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, available_effects, parse_effects
+from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, parse_effects
 from design.params import Design
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import Workspace, sweep_workspace
 from ringpair.angles import parse_angles
-from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
+from ringpair.tables import POSE_COLUMNS, effect_shifts, pose_rows, write_csv
 
 console = Console()
 err_console = Console(stderr=True)
@@ -436,30 +436,10 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
     and RMS tip shift [mm] and the largest deflection under each model.
     """
     d = _design(design)
-    t1 = _angles(theta1, "--theta1")
-    t2 = _angles(theta2, "--theta2")
-    g1, g2 = (np.deg2rad(g).ravel() for g in np.meshgrid(t1, t2, indexing="ij"))
-    rest = np.array([d.robot.free_length, 0.0, 0.0])
-    rows = []
+    t1 = np.deg2rad(_angles(theta1, "--theta1"))
+    t2 = np.deg2rad(_angles(theta2, "--theta2"))
     with console.status("comparing model effects (first use compiles each model)"):
-        base = solve_design(d, g1, g2, RingPairModel(), ordered=True)
-        for name in (*available_effects(), "all"):
-            chosen = frozenset(available_effects()) if name == "all" else frozenset({name})
-            eq = solve_design(d, g1, g2, RingPairModel(chosen), ordered=True)
-            shift = np.linalg.norm(eq.position - base.position, axis=1) * 1e3
-            rows.append(
-                {
-                    "effect": name,
-                    "max_shift_mm": float(np.max(shift)),
-                    "rms_shift_mm": float(np.sqrt(np.mean(shift**2))),
-                    "max_deflection_mm": float(
-                        np.max(np.linalg.norm(eq.position - rest, axis=1)) * 1e3
-                    ),
-                    "without_state": int(np.count_nonzero(~eq.stable)),
-                    "snaps": int(np.count_nonzero(eq.snapped)),
-                }
-            )
-    base_max = float(np.max(np.linalg.norm(base.position - rest, axis=1)) * 1e3)
+        rows, base_max = effect_shifts(d, t1, t2)
     table = Table(
         title=f"'{d.name}': tip shift of each effect against the baseline "
         f"(baseline largest deflection {base_max:.2f} mm)"

@@ -22,11 +22,9 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import pickle
 import platform
 import subprocess
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -36,28 +34,36 @@ from typing import Any
 
 import numpy as np
 
-from design.equilibrium import solve_design, solve_equilibria
-from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel
+from design.atomic import atomic_path, write_text
+from design.equilibrium import solve_equilibria
+from design.geometry import disc_radius, rest_position
+from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.parameters import index
 from design.params import Design
-from design.workspace import Workspace, angle_grid, disc_radius, sweep_workspace
+from design.units import MM
+from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.study import Study
+from ringpair.tables import effect_shifts
 
 TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
     "ring_remanence": ("rel", 0.02),
-    "ring_outer_diameter": ("abs", 0.02e-3),
-    "ring_inner_diameter": ("abs", 0.02e-3),
-    "ring_length": ("abs", 0.02e-3),
+    "ring_outer_diameter": ("abs", 0.02 * MM),
+    "ring_inner_diameter": ("abs", 0.02 * MM),
+    "ring_length": ("abs", 0.02 * MM),
     "catheter_youngs_modulus": ("rel", 0.10),
     "wire_youngs_modulus": ("rel", 0.05),
     "external_remanence": ("rel", 0.02),
-    "external_center_x": ("abs", 1e-3),
-    "external_center_y": ("abs", 1e-3),
-    "external_center_z": ("abs", 1e-3),
+    "external_center_x": ("abs", 1 * MM),
+    "external_center_y": ("abs", 1 * MM),
+    "external_center_z": ("abs", 1 * MM),
 }
 """Manufacturing and placement tolerances of the Monte Carlo (one sigma): grade spread of
 NdFeB remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %),
 NiTi wire (5 %), and +-1 mm placement of the external magnet."""
+
+EFFECTS_PATH = np.deg2rad(np.arange(0.0, 181.0, 12.0))
+"""theta1 of the effects stage [rad], driven in order with theta2 = 0: the paper's planar
+experiment, as ``ringpair effects`` by default."""
 
 TOLERANCE_LOOP = 120
 """Parallel-ring loop samples per Monte Carlo sample: the polygon's inscribed disc is then
@@ -106,11 +112,8 @@ def _stage(run: Run, name: str, inputs: tuple, work: Callable[[], Any]) -> Any:
         except Exception as exc:
             raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
         seconds = time.perf_counter() - t0
-        store.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=store.parent, suffix=".tmp")
-        with os.fdopen(fd, "wb") as f:
+        with atomic_path(store) as tmp, tmp.open("wb") as f:
             pickle.dump((result, seconds), f, protocol=4)
-        os.replace(tmp, store)
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
@@ -131,33 +134,13 @@ def tolerance_spread(
     loop = angle_grid(2 * np.pi / TOLERANCE_LOOP)
     theta = np.tile(loop, samples)
     eq = solve_equilibria(model, np.repeat(params, len(loop), axis=1), theta, theta)
-    rest = np.array([design.robot.free_length, 0.0, 0.0])
+    rest = rest_position(design.robot.free_length)
     radii = []
     for k in range(samples):
         rows = slice(k * len(loop), (k + 1) * len(loop))
         ok = eq.stable[rows]
         radii.append(disc_radius((eq.position[rows][ok] - rest)[:, 1:]))
     return {"disc_radius": np.array(radii), "samples": samples, "seed": seed}
-
-
-def effect_shifts(design: Design) -> list[dict[str, float | str]]:
-    """Tip shift [mm] of each effect against the baseline, theta1 = 0..180 deg in order,
-    theta2 = 0 (as ``ringpair effects``)."""
-    theta = np.deg2rad(np.arange(0.0, 181.0, 12.0))
-    base = solve_design(design, theta, 0.0, RingPairModel(), ordered=True)
-    rows: list[dict[str, float | str]] = []
-    for name in (*EFFECTS, "all"):
-        chosen = frozenset(EFFECTS) if name == "all" else frozenset({name})
-        eq = solve_design(design, theta, 0.0, RingPairModel(chosen), ordered=True)
-        shift = np.linalg.norm(eq.position - base.position, axis=1) * 1e3
-        rows.append(
-            {
-                "effect": name,
-                "max_shift_mm": float(np.nanmax(shift)),
-                "rms_shift_mm": float(np.sqrt(np.nanmean(shift**2))),
-            }
-        )
-    return rows
 
 
 def sha256(path: Path) -> str:
@@ -258,7 +241,7 @@ def run_study(
         lambda: tolerance_spread(chosen, samples, seed, faithful),
     )
     tell("how much each model effect matters")
-    _stage(run, "effects", key, lambda: effect_shifts(chosen))
+    _stage(run, "effects", key, lambda: effect_shifts(chosen, EFFECTS_PATH, np.zeros(1))[0])
     tell("CAD: parts, checks, renders")
     _stage(
         run,
@@ -329,8 +312,6 @@ def write_manifest(
             for p in files
         ],
     }
-    from design.atomic import write_text
-
     path = run.out / "manifest.json"
     write_text(path, json.dumps(doc, indent=2) + "\n")
     return path
