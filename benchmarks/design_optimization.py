@@ -12,11 +12,14 @@ unstable scores BAD. The catheter material is an integer variable (``integrality
 Both optima are re-checked by the forward workspace sweep (``design.workspace``).
 
 Run: ``python benchmarks/design_optimization.py [--maxiter 200] [--popsize 15]``. Prints the best
-objective of each, their wall times and the ratio. On the shared 2-core development machine
-(2026-11-22): NLP 27.022 mm (forward sweep 27.022 mm; Pebax 7233 catheter) in 4.8 s,
-9 solves, including building the NLP; differential evolution 25.355 mm (feasible) after
-200 generations, 27,135 forward evaluations, 198.5 s, not yet converged; ratio 41.7x.
-The demonstrator as built: 20.531 mm (it also breaks the study's 15 deg twist limit).
+objective of each, their wall times and the ratio. Both objectives are the disc radius of
+the polygon of the study's 24 parallel-ring samples (design.geometry.disc_radius), a little
+below the forward sweep's 720-sample figure. On the shared 2-core development machine
+(2026-11-24): NLP 26.791 mm (forward sweep 27.022 mm; Pebax 7233 catheter) in 1.6 s,
+9 solves, including building the NLP; differential evolution 26.262 mm (forward
+26.489 mm, feasible) after 200 generations, 27,135 forward evaluations, 223.8 s, not yet
+converged; ratio 137x. The demonstrator as built: 20.531 mm (it also breaks the study's
+15 deg twist limit).
 """
 
 from __future__ import annotations
