@@ -45,6 +45,7 @@ from cad.render import render_all
 from cad.selflocking import SelfLocking
 from design.atomic import write_text
 from design.params import Design
+from design.units import GRAM, MM3
 
 
 @dataclass
@@ -144,7 +145,7 @@ def _parts_table(assembly: RobotAssembly, process: PrintProcess) -> list[dict[st
                 "quantity": part.quantity,
                 "printed": part.printed,
                 "volume_mm3": round(volume, 3),
-                "mass_g": round(volume * 1e-9 * process.material_density_kg_m3 * 1e3, 4)
+                "mass_g": round(volume * MM3 * process.material_density_kg_m3 / GRAM, 4)
                 if part.printed
                 else None,
                 "size_mm": [round(bb.xlen, 3), round(bb.ylen, 3), round(bb.zlen, 3)],

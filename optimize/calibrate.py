@@ -38,7 +38,7 @@ from design.geometry import rest_position
 from design.model import RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
-from design.units import DEG, MM
+from design.units import DEG, GRAM, MM, MPA
 from optimize.measurements import Measurements
 from optimize.paper_grid import (
     PAPER_FIELD_GRID,
@@ -127,24 +127,26 @@ FREE_PARAMETERS: dict[str, FreeParameter] = {
         _log("catheter_torsion_scale", 1e-3, 1e3, 1.0),
         _log("external_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
         _log("ring_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
-        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1e-6)),
-        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1e-6)),
+        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
+        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
         *(
-            FreeParameter(f"external_center_{a}", "linear", -10.0, 10.0, 5.0, MM, 0.05, ("mm", 1e3))
+            FreeParameter(
+                f"external_center_{a}", "linear", -10.0, 10.0, 5.0, MM, 0.05, ("mm", 1 / MM)
+            )
             for a in "xyz"
         ),
         *(
             FreeParameter(f"external_axis_{a}", "linear", -2.0, 2.0, 5.0, 0.01, 0.5, ("", 1.0))
             for a in "xyz"
         ),
-        FreeParameter("free_length", "linear", 1e-3, 10.0, 5.0, MM, 0.05, ("mm", 1e3)),
+        FreeParameter("free_length", "linear", 1e-3, 10.0, 5.0, MM, 0.05, ("mm", 1 / MM)),
         FreeParameter(
             "wire_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
         ),
         FreeParameter(
             "catheter_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
         ),
-        FreeParameter("tip_mass", "linear", 0.0, 0.5, 1.0, 1e-3, label=("g", 1e3)),
+        FreeParameter("tip_mass", "linear", 0.0, 0.5, 1.0, GRAM, label=("g", 1 / GRAM)),
     )
 }
 """The parameters calibration can free, with their fit units, bounds and prior widths."""
