@@ -3,33 +3,37 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
 import click
 
-from optimize.study import StudyError, default_study, load_study
-from ringpair.pipeline import StageError, run_study, write_manifest
+from ringpair.options import (
+    SCHEDULER,
+    STUDY,
+    UserError,
+    bad_input,
+    console,
+    default_out,
+    err_console,
+    path_option,
+    print_error,
+    study_from,
+)
 
 
 @click.command()
-@click.argument("study_path", metavar="[STUDY]", required=False, type=click.Path(path_type=Path))
-@click.option(
-    "--out",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Output directory. Default: outputs/<study name>.",
-)
-@click.option(
+@STUDY
+@path_option("--out", help="Output directory. Default: outputs/<study name>.")
+@path_option(
     "--data",
-    type=click.Path(path_type=Path),
-    default=None,
     help="Measured data set (folder with design.toml and measurements.csv) to diagnose.",
 )
 @click.option("--samples", default=200, show_default=True, help="Tolerance Monte Carlo samples.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the Monte Carlo.")
 @click.option("--workers", default=2, show_default=True, help="Local Dask workers.")
-@click.option("--scheduler", default=None, help="Address of a running Dask scheduler.")
+@SCHEDULER
 @click.option("--no-render", is_flag=True, help="Skip the part renders (faster).")
 def study(
     study_path: Path | None,
@@ -49,21 +53,17 @@ def study(
 
     Exit codes: 0 done; 2 bad input; 3 a stage failed (named, with what was written).
     """
-    import sys
-
-    from ringpair.cli import UserError, console, err_console
+    from ringpair.pipeline import StageError, run_study, write_manifest
     from ringpair.report_html import write_report
 
-    try:
+    with bad_input(OSError, UnicodeDecodeError):
         text = study_path.read_text() if study_path else ""
-        s = default_study() if study_path is None else load_study(study_path)
-    except (StudyError, OSError, UnicodeDecodeError) as exc:
-        raise UserError(str(exc)) from None
+    s = study_from(study_path)
     if data is not None and not (data / "measurements.csv").is_file():
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
     if samples < 2:
         raise UserError(f"--samples must be at least 2; got {samples}")
-    out = out or Path("outputs") / s.name
+    out = out or default_out(s.name)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     try:
@@ -88,7 +88,7 @@ def study(
             say("report")
             written = write_report(run)
     except StageError as exc:
-        err_console.print(f"[bold red]error:[/] {exc}")
+        print_error(str(exc))
         if exc.run is not None:
             manifest = write_manifest(exc.run, study_path, data, seed, failed=exc.stage)
             done = ", ".join(exc.run.seconds) or "none"

@@ -1,0 +1,45 @@
+"""``ringpair cad``: printable parts of a design, checked and rendered."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ringpair.options import DESIGN, bad_input, console, default_out, design_from, path_option
+
+
+@click.command()
+@DESIGN
+@path_option(
+    "--out",
+    help="Directory for the STEP assembly, STL parts, 3MF plates, check tables and renders. "
+    "Default: outputs/<design name>/cad.",
+)
+@click.option(
+    "--process",
+    type=click.Choice(["fdm", "resin"]),
+    default="fdm",
+    show_default=True,
+    help="Printing process: sets fit allowances, clearances, minimum wall and build volume.",
+)
+@click.option("--no-render", is_flag=True, help="Skip the pyvista renders (faster).")
+def cad(design: Path | None, out: Path | None, process: str, no_render: bool) -> None:
+    """Printable parts of DESIGN: the two mounting pieces with the helical tracking groove
+    and the worm-gear actuator, in millimetres.
+
+    Writes ringpair_robot.step (assembly with named parts), stl/<part>.stl, 3MF print
+    plates, checks.csv (watertight, volume, minimum wall, build volume, interference, gear
+    centre distance), parts.csv, cad_summary.json and renders/*.png. Exits 3 if a
+    printability check fails.
+    """
+    d = design_from(design)
+    from cad import CadError, build_parts  # after the design is read: CAD loads slowly
+
+    out = out or default_out(d.name, "cad")
+    with console.status("building, exporting, checking and rendering parts"), bad_input(CadError):
+        report = build_parts(d, out, process, render=not no_render)
+    console.print(report.summary(), highlight=False)
+    if not report.passed:
+        sys.exit(3)

@@ -1,0 +1,137 @@
+"""``ringpair calibrate``: the model's uncertain parameters fitted to measured data."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.markup import escape
+from rich.table import Table
+
+from design.atomic import write_text
+from design.suggest import did_you_mean
+from ringpair.options import (
+    CSV_DESIGN,
+    DATA,
+    UserError,
+    bad_input,
+    console,
+    effects_option,
+    err_console,
+    measured_data,
+    model_from,
+    path_option,
+)
+
+
+@click.command()
+@DATA
+@CSV_DESIGN
+@effects_option("none")
+@click.option(
+    "--free",
+    default=None,
+    help="Comma list of the parameters to fit. Default: bending_rigidity_scale and "
+    "external_center_x/y/z, plus each effect's own (torsion scales, friction angles, tip mass).",
+)
+@click.option("--priors", is_flag=True, help="Add Gaussian priors centred on the nominal design.")
+@click.option(
+    "--profile",
+    is_flag=True,
+    help="Also give each parameter's 1-sigma profile-likelihood interval (it fixed, the others "
+    "refitted): right where parameters trade off nonlinearly, where standard errors are not.",
+)
+@path_option(
+    "--json",
+    "json_out",
+    help="Also write the estimates, standard errors, correlations and errors as JSON (SI).",
+)
+def calibrate(
+    data: Path,
+    design_path: Path | None,
+    effects: str,
+    free: str | None,
+    priors: bool,
+    profile: bool,
+    json_out: Path | None,
+) -> None:
+    """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
+    or a CSV, spec/formats.md) by least squares with exact Jacobians; print the estimates
+    with their standard errors, and the RMS and largest tip error."""
+    from optimize.calibrate import FREE_PARAMETERS
+    from optimize.calibrate import calibrate as fit_parameters
+    from optimize.profile import profile_intervals
+
+    if profile and priors:
+        raise UserError("--profile is for fits without --priors (it profiles the data's misfit)")
+
+    d, m = measured_data(data, design_path)
+    model = model_from(effects)
+    names = None if free is None else tuple(n.strip() for n in free.split(",") if n.strip())
+    for n in names or ():
+        if n not in FREE_PARAMETERS:
+            raise UserError(
+                f"--free: {n!r} cannot be calibrated{did_you_mean(n, FREE_PARAMETERS)} "
+                f"(expected names from {', '.join(FREE_PARAMETERS)})"
+            )
+    fitting = "fitting (the first run on a machine compiles the model)"
+    with console.status(fitting), bad_input(ValueError):
+        res = fit_parameters(d, m, model.effects, names, priors=priors)
+    intervals = {}
+    if profile:
+        with console.status("profile likelihood"):
+            intervals = profile_intervals(d, m, res, res.names)
+    table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {len(m)} rows")
+    columns = ["parameter", "nominal", "estimate", "std. error"]
+    for col in columns + (["1-sigma profile interval"] if profile else []) + ["unit"]:
+        table.add_column(col, justify="right")
+    for row in res.table():
+        cells = [
+            str(row["name"]),
+            f"{row['nominal']:.5g}",
+            f"{row['estimate']:.5g}",
+            f"{row['standard_error']:.2g}",
+        ]
+        if profile:
+            iv, factor = intervals[str(row["name"])], FREE_PARAMETERS[str(row["name"])].label[1]
+            cells.append(f"{iv.lower * factor:.4g} to {iv.upper * factor:.4g}")
+        table.add_row(*cells, str(row["unit"]))
+    console.print(table)
+    console.print(
+        f"tip error: RMS {res.rmse_mm:.3f} mm, largest {res.max_abs_mm:.3f} mm; implied noise "
+        f"{res.noise_mm:.3f} mm per coordinate; "
+        + ("converged" if res.converged else "[yellow]NOT converged[/]")
+        + f" ({res.evaluations} solves, {res.time_s:.2f} s)"
+    )
+    if res.at_bounds:
+        err_console.print(f"[yellow]warning:[/] at a bound: {', '.join(res.at_bounds)}")
+    if "determine only" in res.message:
+        err_console.print(f"[yellow]warning:[/] {escape(res.message)}")
+    if json_out is not None:
+
+        def finite(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None  # JSON has no inf or NaN
+
+        doc = {
+            "design": d.name,
+            "model": model.name,
+            "rows": len(m),
+            "estimate": res.estimate,
+            "standard_error": {k: finite(v) for k, v in res.standard_error.items()},
+            "nominal": res.nominal,
+            **(
+                {"profile_interval": {k: [v.lower, v.upper] for k, v in intervals.items()}}
+                if profile
+                else {}
+            ),
+            "correlation": [[finite(c) for c in row] for row in np.round(res.correlation, 6)],
+            "rmse_mm": res.rmse_mm,
+            "max_abs_mm": res.max_abs_mm,
+            "noise_mm": res.noise_mm,
+            "converged": res.converged,
+            "message": res.message,
+        }
+        write_text(json_out, json.dumps(doc, indent=2) + "\n")
+        console.print(f"wrote {json_out}")

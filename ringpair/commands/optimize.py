@@ -1,0 +1,167 @@
+"""``ringpair optimize``: a design study from its file to the best design, Pareto fronts,
+plots and a summary. Millimetres at the edges, SI inside."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+import numpy as np
+
+from design.atomic import write_text
+from design.designfile import save_design
+from design.model import RingPairModel
+from design.units import MM
+from design.workspace import Workspace, sweep_workspace
+from ringpair.options import (
+    SCHEDULER,
+    STUDY,
+    UserError,
+    console,
+    default_out,
+    path_option,
+    study_from,
+)
+from ringpair.tables import pareto_rows, write_rows
+
+if TYPE_CHECKING:
+    from optimize.nlp import StudyResult
+    from optimize.study import Study
+    from optimize.sweeps import ParetoResult
+
+
+@click.command()
+@STUDY
+@path_option("--out", help="Output directory. Default: outputs/<study name>/optimize.")
+@SCHEDULER
+@click.option(
+    "--workers", default=2, show_default=True, help="Local Dask workers (without --scheduler)."
+)
+@click.option("--no-pareto", is_flag=True, help="Skip the Pareto sweeps.")
+def optimize(
+    study_path: Path | None, out: Path | None, scheduler: str | None, workers: int, no_pareto: bool
+) -> None:
+    """Choose the design of STUDY (TOML; default: the embedded demonstrator study).
+
+    Writes best_design.toml, pareto_<quantity>.csv, pareto.png, workspace.png and
+    summary.json. Pareto points run on Dask and are kept in OUT/points, so a rerun of the
+    same study resumes. Exit 0 also for an infeasible study: the conflict report is
+    printed and written to summary.json; exit 2 for a bad study file.
+    """
+    from optimize.nlp import solve_study
+    from ringpair.plots import plot_fronts, plot_workspaces
+
+    study = study_from(study_path)
+    if workers < 1:
+        raise UserError(f"--workers must be at least 1; got {workers}")
+    out = out or default_out(study.name, "optimize")
+    out.mkdir(parents=True, exist_ok=True)
+    with console.status(f"solving '{study.name}' ({study.starts} starts per material)"):
+        best = solve_study(study)
+    console.print(best.report())
+    model = RingPairModel(study.effects)
+    with console.status("forward simulation of the starting and the best design"):
+        start_ws = sweep_workspace(study.base, model=model)
+        end_ws = sweep_workspace(best.design, model=model) if best.design is not None else None
+    written = []
+    if best.design is not None and end_ws is not None:
+        save_design(best.design, out / "best_design.toml")
+        written.append(out / "best_design.toml")
+        plot_workspaces(start_ws, end_ws, out / "workspace.png")
+        written.append(out / "workspace.png")
+        console.print(
+            f"disc radius by forward simulation: start {start_ws.disc_radius / MM:.2f} mm, "
+            f"best {end_ws.disc_radius / MM:.2f} mm"
+        )
+    pareto = None
+    if study.pareto and not no_pareto:
+        pareto = _run_sweeps(study, out, scheduler, workers)
+        for against, points in pareto.sweeps.items():
+            path = out / f"pareto_{against}.csv"
+            write_rows(path, pareto_rows(points, study))
+            written.append(path)
+        plot_fronts(pareto, best, study, out / "pareto.png")
+        written.append(out / "pareto.png")
+        console.print(
+            f"Pareto: {pareto.solved} points solved, {pareto.resumed} resumed, "
+            f"{pareto.seconds:.1f} s on {pareto.workers or 'no'} workers"
+        )
+    doc = summary(study, best, start_ws, end_ws, pareto)
+    write_text(out / "summary.json", json.dumps(doc, indent=2) + "\n")
+    written.append(out / "summary.json")
+    for path in written:
+        console.print(f"wrote {path}")
+
+
+def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) -> ParetoResult:
+    """The study's Pareto sweeps on Dask, with a progress bar."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from optimize.sweeps import run_sweeps
+
+    with Progress(
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+    ) as bar:
+        task = bar.add_task("Pareto points", total=None)
+
+        def step(done: int, n: int) -> None:
+            bar.update(task, completed=done, total=n)
+
+        return run_sweeps(study, out, scheduler=scheduler, workers=workers, progress=step)
+
+
+def summary(
+    study: Study,
+    best: StudyResult,
+    start: Workspace,
+    end: Workspace | None,
+    pareto: ParetoResult | None,
+) -> dict:
+    """The JSON summary (SI plus the forward-simulated radii in mm)."""
+    from optimize.sweeps import is_monotone
+
+    doc: dict[str, object] = {
+        "study": study.name,
+        "feasible": best.feasible,
+        "objective": best.objective,
+        "values": best.values,
+        "materials": list(best.materials),
+        "metrics": best.metrics,
+        "base_metrics": best.base_metrics,
+        "active": list(best.active),
+        "constraints": [c.__dict__ for c in best.constraints],
+        "starts": [s.__dict__ for s in best.starts],
+        "conflicts": [c.describe() for c in best.conflicts],
+        "seconds": best.seconds,
+        "forward": {
+            "start_disc_radius_mm": start.disc_radius / MM,
+            "best_disc_radius_mm": None if end is None else end.disc_radius / MM,
+        },
+    }
+    if pareto is not None:
+        doc["pareto"] = {
+            "seconds": pareto.seconds,
+            "solved": pareto.solved,
+            "resumed": pareto.resumed,
+            "workers": pareto.workers,
+            "monotone": {a: is_monotone(p) for a, p in pareto.sweeps.items()},
+        }
+    return json.loads(json.dumps(doc, default=_plain))
+
+
+def _plain(x: object) -> object:
+    """JSON for what json cannot write: numpy values as numbers and lists, sets as lists,
+    anything else as its str."""
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, tuple | frozenset | set):
+        return list(x)
+    return str(x)

@@ -1,0 +1,174 @@
+"""``ringpair synth``: a synthetic bench data set to test calibration and diagnosis on."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.table import Table
+
+from design.geometry import rest_position
+from design.parameters import PARAMETERS
+from design.suggest import did_you_mean
+from design.units import DEG, GRAM, MM, MPA
+from ringpair.options import (
+    DESIGN,
+    UserError,
+    console,
+    default_out,
+    design_from,
+    effects_option,
+    err_console,
+    model_from,
+    path_option,
+)
+
+SET_UNITS = {"m": ("mm", MM), "rad": ("deg", DEG), "Pa": ("MPa", MPA), "kg": ("g", GRAM)}
+"""Units of --set values: the model's SI unit -> (the unit typed, its size in SI)."""
+
+
+def _set_unit(name: str) -> tuple[str, float]:
+    """The unit a --set value of parameter ``name`` is typed in, and its size in SI."""
+    unit = PARAMETERS[name].unit
+    return SET_UNITS.get(unit, (unit, 1.0))
+
+
+def _overrides(items: tuple[str, ...]) -> dict[str, float]:
+    """--set NAME=VALUE pairs in file units (mm, deg, MPa, g) as SI model parameters."""
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise UserError(f"--set expects NAME=VALUE (e.g. wire_torsion_scale=2); got {item!r}")
+        if name not in PARAMETERS:
+            raise UserError(
+                f"--set: unknown model parameter {name!r}{did_you_mean(name, PARAMETERS)}"
+            )
+        unit, size = _set_unit(name)
+        try:
+            value = float(text)
+        except ValueError:
+            raise UserError(
+                f"--set {name} expects a number [{unit}]; got {text.strip()!r}"
+            ) from None
+        if not np.isfinite(value):
+            raise UserError(f"--set {name} expects a finite number [{unit}]; got {text.strip()!r}")
+        out[name] = value * size
+    return out
+
+
+@click.command()
+@DESIGN
+@effects_option("none")
+@click.option(
+    "--noise-mm",
+    type=click.FloatRange(0.0, 100.0),
+    default=0.3,
+    show_default=True,
+    help="One-sigma Gaussian tracker noise on each measured coordinate [mm].",
+)
+@click.option("--seed", type=int, default=1, show_default=True, help="Seed of the noise.")
+@path_option(
+    "--out",
+    help="Data-set folder to write (design.toml + measurements.csv). "
+    "Default: outputs/<design name>/synth.",
+)
+@click.option(
+    "--view",
+    type=click.Choice(["3d", "top"]),
+    default="3d",
+    show_default=True,
+    help="3d: x, y and z tracked; top: a camera above the robot sees x and y only.",
+)
+@click.option(
+    "--n",
+    "n_points",
+    type=click.IntRange(6, 100_000),
+    default=60,
+    show_default=True,
+    help="About this many configurations: theta1 swept from parallel to antiparallel and "
+    "back for theta2 = 0, 120, 240 deg, in that order.",
+)
+@click.option(
+    "--set",
+    "settings",
+    multiple=True,
+    metavar="NAME=VALUE",
+    help="A true model parameter that differs from DESIGN (repeatable), e.g. "
+    "wire_torsion_scale=2, bending_rigidity_scale=0.8, wire_friction_angle=3; lengths in mm, "
+    "angles in deg, moduli in MPa, masses in g. design.toml keeps the nominal values.",
+)
+@click.option("--tip-angles", is_flag=True, help="Also record the ring angles at the tip.")
+def synth(
+    design: Path | None,
+    effects: str,
+    noise_mm: float,
+    seed: int,
+    out: Path | None,
+    view: str,
+    n_points: int,
+    settings: tuple[str, ...],
+    tip_angles: bool,
+) -> None:
+    """Synthetic bench data of DESIGN: a data set (spec/formats.md) to test calibration
+    and diagnosis on.
+
+    Drives the rings along a bench path with the chosen model effects (and any --set
+    truths), adds Gaussian noise and writes design.toml (nominal) and measurements.csv
+    (with a sequence column: the acquisition order). Configurations without a stable
+    equilibrium are dropped and counted.
+    """
+    from optimize.measurements import save_dataset
+    from optimize.synth import synthesize_data
+
+    d = design_from(design)
+    model = model_from(effects)
+    truth = _overrides(settings)
+    out = out or default_out(d.name, "synth")
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {out} exists and is not a folder; expected a data-set folder")
+    with console.status("simulating the bench run (the first run on a machine compiles the model)"):
+        data = synthesize_data(
+            d,
+            model.effects,
+            n=n_points,
+            view=view,
+            noise_mm=noise_mm,
+            seed=seed,
+            params_override=truth,
+            tip_angles=tip_angles,
+        )
+    m = data.measurements
+    if len(m) == 0:
+        raise UserError(
+            "no configuration has a stable equilibrium with these settings; nothing written"
+        )
+    provenance = (
+        f"ringpair synth: design '{d.name}', model {data.model.name}, view {view}, "
+        f"noise {noise_mm:g} mm, seed {seed}"
+        + "".join(f", true {item.strip()}" for item in settings)
+    )
+    save_dataset(out, d, m, comment=provenance)
+    rest = rest_position(d.robot.free_length)
+    deflection = np.linalg.norm(np.nan_to_num(m.position - rest), axis=1) / MM
+    table = Table(title=f"synthetic data set of '{d.name}' ({data.model.name} model)")
+    table.add_column("item")
+    table.add_column("value", justify="right")
+    table.add_row("configurations written", str(len(m)))
+    table.add_row("dropped (no stable equilibrium)", str(data.dropped))
+    table.add_row("reached by a snap-through", str(data.snapped))
+    table.add_row("view", "x, y (top)" if view == "top" else "x, y, z")
+    table.add_row("noise (one sigma, each coordinate)", f"{noise_mm:g} mm, seed {seed}")
+    table.add_row("deflection seen", f"{deflection.min():.2f} .. {deflection.max():.2f} mm")
+    for k, v in truth.items():
+        unit, size = _set_unit(k)
+        table.add_row(f"true {k}", f"{v / size:g} {unit if unit != '-' else ''}".rstrip())
+    console.print(table)
+    if data.dropped:
+        err_console.print(
+            f"[yellow]warning:[/] {data.dropped} configuration(s) without a stable equilibrium "
+            "were dropped"
+        )
+    console.print(f"wrote {out}/: design.toml, measurements.csv")

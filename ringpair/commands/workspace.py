@@ -1,0 +1,125 @@
+"""``ringpair workspace``: the reachable tip set over full turns of both rings."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.table import Table
+
+from design.atomic import write_text
+from design.equilibrium import solve_design
+from design.params import Design
+from design.units import MM
+from design.workspace import Workspace, sweep_workspace
+from ringpair.options import (
+    DESIGN,
+    console,
+    default_out,
+    design_from,
+    effects_option,
+    model_from,
+    path_option,
+)
+from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
+
+
+@click.command()
+@DESIGN
+@path_option(
+    "--out",
+    help="Directory for workspace.csv, summary.json and the PNG plots. "
+    "Default: outputs/<design name>/workspace.",
+)
+@click.option(
+    "--step",
+    type=click.FloatRange(0.1, 90.0),
+    default=5.0,
+    show_default=True,
+    help="Grid spacing of theta1 and theta2 over a full turn [deg].",
+)
+@effects_option("default")
+def workspace(design: Path | None, out: Path | None, step: float, effects: str) -> None:
+    """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
+
+    Prints the deflection range along y and z, the largest deflection and its direction,
+    the radius of the largest disc around the rest position inside the reachable set
+    (size and symmetry in one number) and the neutral (antiparallel) deflection; writes
+    workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z) and
+    deflection.png (deflection against theta1 with theta2 = 0).
+    """
+    from ringpair.plots import write_workspace_plots
+
+    d = design_from(design)
+    model = model_from(effects)
+    out = out or default_out(d.name, "workspace")
+    with console.status("sweeping the workspace"):
+        ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
+        sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
+        sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
+    write_csv(
+        out / "workspace.csv",
+        pose_rows(ws.grid, ws.rest_position),
+        POSE_COLUMNS,
+        header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
+    )
+    summary = workspace_summary(ws, d, step, model.name)
+    write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    pictures = write_workspace_plots(ws, sweep, d, out)
+    _print_summary(summary)
+    console.print(
+        f"wrote {out}/: workspace.csv, summary.json, " + ", ".join(p.name for p in pictures)
+    )
+
+
+def workspace_summary(ws: Workspace, design: Design, step_deg: float, model: str) -> dict:
+    """The workspace metrics in file units (mm, deg)."""
+    direction = ws.max_direction
+    return {
+        "design": design.name,
+        "model": model,
+        "grid_step_deg": step_deg,
+        "configurations": len(ws.grid),
+        "without_state": ws.n_without_state,
+        "snapped": ws.n_snapped,
+        "multistable": ws.n_multistable,
+        "free_length_mm": design.robot.free_length / MM,
+        "y_range_mm": [v / MM for v in ws.y_range],
+        "z_range_mm": [v / MM for v in ws.z_range],
+        "max_deflection_mm": ws.max_deflection / MM,
+        "max_deflection_percent_of_length": 100 * ws.max_deflection / design.robot.free_length,
+        "max_deflection_direction": [float(c) for c in direction],
+        "max_deflection_direction_deg": float(np.rad2deg(np.arctan2(direction[2], direction[1]))),
+        "max_deflection_theta_deg": [float(np.rad2deg(a)) for a in ws.max_angles],
+        "disc_radius_mm": ws.disc_radius / MM,
+        "neutral_deflection_mm": ws.neutral_deflection / MM,
+        "boundary_excess_mm": ws.boundary_excess / MM,
+    }
+
+
+def _print_summary(s: dict) -> None:
+    table = Table(title=f"workspace of '{s['design']}' ({s['model']} model)")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    table.add_row(
+        "configurations (without a state / snapped / multistable)",
+        f"{s['configurations']} ({s['without_state']} / {s['snapped']} / {s['multistable']})",
+    )
+    table.add_row("deflection range along y", "{:.2f} .. {:.2f} mm".format(*s["y_range_mm"]))
+    table.add_row("deflection range along z", "{:.2f} .. {:.2f} mm".format(*s["z_range_mm"]))
+    table.add_row(
+        "largest deflection",
+        f"{s['max_deflection_mm']:.2f} mm "
+        f"({s['max_deflection_percent_of_length']:.1f} % of the length)",
+    )
+    table.add_row(
+        "  its direction (from +y towards +z)", f"{s['max_deflection_direction_deg']:.1f} deg"
+    )
+    table.add_row(
+        "  at theta1, theta2", "{:.1f}, {:.1f} deg".format(*s["max_deflection_theta_deg"])
+    )
+    table.add_row("largest disc around rest (radius)", f"{s['disc_radius_mm']:.2f} mm")
+    table.add_row("neutral (antiparallel) deflection", f"{s['neutral_deflection_mm']:.3f} mm")
+    console.print(table)
