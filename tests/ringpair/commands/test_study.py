@@ -11,26 +11,16 @@ import pytest
 import trimesh
 from click.testing import CliRunner
 from PIL import Image
-from studies import SMALL
 
 from ringpair import report_html
 from ringpair.cli import cli
 
-STUDY = (
-    SMALL
-    + """
-[[pareto]]
-against = "external_distance"
-points = 3
-"""
-)
-
 
 @pytest.fixture(scope="module")
-def study_run(tmp_path_factory):
+def study_run(tmp_path_factory, pareto_study):
     tmp = tmp_path_factory.mktemp("study")
     path = tmp / "small.toml"
-    path.write_text(STUDY)
+    path.write_text(pareto_study)
     out = tmp / "out"
     args = ["study", str(path), "--out", str(out), "--samples", "20", "--seed", "3"]
     first = CliRunner().invoke(cli, args)
@@ -93,9 +83,9 @@ def test_rerun_reuses_every_stage(study_run):
     assert all(stage["reused"] for stage in manifest["stages"].values())
 
 
-def test_bad_study_is_exit_2_and_writes_nothing(tmp_path):
+def test_bad_study_is_exit_2_and_writes_nothing(tmp_path, pareto_study):
     path = tmp_path / "bad.toml"
-    path.write_text(STUDY.replace("[free]", "[freee]"))
+    path.write_text(pareto_study.replace("[free]", "[freee]"))
     result = CliRunner().invoke(cli, ["study", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "freee" in result.output
     assert not (tmp_path / "o").exists()

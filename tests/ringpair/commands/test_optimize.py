@@ -9,25 +9,15 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from PIL import Image
-from studies import SMALL
 
 from design.designfile import load_design
 from design.workspace import sweep_workspace
 from ringpair.cli import cli
 
-STUDY = (
-    SMALL
-    + """
-[[pareto]]
-against = "external_distance"
-points = 3
-"""
-)
 
-
-def test_optimize_writes_the_best_design_fronts_plots_and_summary(tmp_path):
+def test_optimize_writes_the_best_design_fronts_plots_and_summary(tmp_path, pareto_study):
     path = tmp_path / "study.toml"
-    path.write_text(STUDY)
+    path.write_text(pareto_study)
     out = tmp_path / "out"
     result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(out)])
     assert result.exit_code == 0, result.output
@@ -51,9 +41,9 @@ def test_optimize_writes_the_best_design_fronts_plots_and_summary(tmp_path):
     assert again.exit_code == 0 and "0 points solved, 3 resumed" in again.output
 
 
-def test_bad_study_file_is_one_message_and_exit_2(tmp_path):
+def test_bad_study_file_is_one_message_and_exit_2(tmp_path, pareto_study):
     path = tmp_path / "study.toml"
-    path.write_text(STUDY.replace("ring_gap_mm = [0.0, 1.0]", "ring_gap_mm = [1.0, 0.0]"))
+    path.write_text(pareto_study.replace("ring_gap_mm = [0.0, 1.0]", "ring_gap_mm = [1.0, 0.0]"))
     result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "ring_gap_mm" in result.output
     assert "Traceback" not in result.output and not (tmp_path / "o").exists()
