@@ -27,8 +27,9 @@ if TYPE_CHECKING:
     from optimize.measurements import Measurements
     from optimize.study import Study
 
-console = Console()
-err_console = Console(stderr=True)
+# No emoji codes: rich would print an angle range like 0:abc:5 as '0🔤5'.
+console = Console(emoji=False)
+err_console = Console(stderr=True, emoji=False)
 
 F = TypeVar("F", bound=Callable[..., Any])
 

@@ -47,3 +47,9 @@ def test_bracketed_section_names_survive_the_terminal(tmp_path, demonstrator_doc
 def test_unknown_effect_exits_2_naming_the_option():
     result = CliRunner().invoke(cli, ["simulate", "--effects", "torsion,twist"])
     assert result.exit_code == 2 and "--effects" in result.output and "'twist'" in result.output
+
+
+def test_messages_show_the_input_as_typed():
+    # ':abc:' is an emoji code to rich; the message must quote the angles as typed.
+    result = CliRunner().invoke(cli, ["simulate", "--theta1", "0:abc:5"])
+    assert result.exit_code == 2 and "got '0:abc:5'" in result.output
