@@ -6,12 +6,12 @@ millimetres off its nominal place), simulated by the baseline model and tracked 
 Gaussian noise. Two data sets: the paper's planar experiment (theta1 = 0..180 deg in 12 deg
 steps, theta2 = 0, top view: 16 points) and a bench path (about 60 points, 3-D).
 
-- Paper's method (:func:`optimize.calibrate.grid_search_two_factors`): exhaustive search
+- Paper's method (:func:`optimize.fitting.calibrate.grid_search_two_factors`): exhaustive search
   over a stiffness scale K_E and a field scale K_B (which scales the dipole's moment and
   position, as in the paper), 10 x 101 points at the paper's resolution, minimising the
   largest error. Each grid point solves every configuration with the same compiled batch
   solver ringpair uses.
-- ringpair (:func:`optimize.calibrate.calibrate`): trust-region least squares on the
+- ringpair (:func:`optimize.fitting.calibrate.calibrate`): trust-region least squares on the
   physical parameters (bending rigidity scale, external magnet centre), exact Jacobians.
 
 Printed: RMS and largest tip error against the data and against the noise-free truth, wall
@@ -34,13 +34,13 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 from design.designfile import default_design  # noqa: E402
-from optimize.calibrate import (  # noqa: E402
+from optimize.fitting.calibrate import (  # noqa: E402
     calibrate,
     default_free,
     grid_search_two_factors,
     predict,
 )
-from optimize.synth import synthesize_data  # noqa: E402
+from optimize.fitting.synth import synthesize_data  # noqa: E402
 
 TRUTH = {
     "bending_rigidity_scale": 0.85,

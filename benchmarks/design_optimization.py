@@ -4,7 +4,7 @@ derivatives, equilibria as constraints, multi-start over the catheter materials)
 run.
 
 The baseline evaluates every candidate by forward simulation (``design.solve_equilibria``
-on the study's sampled configurations, via :func:`optimize.nlp.evaluate_design`, the same
+on the study's sampled configurations, via :func:`optimize.sizing.nlp.evaluate_design`, the same
 metric and constraint expressions as the NLP) and handles the constraints by a penalty:
 minimise -disc_radius / disc_radius(base) + PENALTY x (sum of the constraint violations in
 their file units: mm, deg, %), a candidate whose equilibria do not converge or are
@@ -37,9 +37,9 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 from design.workspace import sweep_workspace  # noqa: E402
-from optimize.nlp import evaluate_design, solve_study  # noqa: E402
-from optimize.nlp_designs import design_with, material_combinations  # noqa: E402
-from optimize.study import default_study  # noqa: E402
+from optimize.sizing.nlp import evaluate_design, optimize_design  # noqa: E402
+from optimize.sizing.nlp_designs import design_with, material_combinations  # noqa: E402
+from optimize.sizing.studyfile import default_study  # noqa: E402
 
 PENALTY = 10.0
 BAD = 1e3
@@ -59,7 +59,7 @@ def main() -> None:
     hi = np.array([b.high for b in study.free])
 
     t0 = time.perf_counter()
-    result = solve_study(study)
+    result = optimize_design(study)
     t_nlp = time.perf_counter() - t0
     assert result.feasible and result.design is not None, result.report()
 
@@ -127,7 +127,7 @@ def pareto_workers(study) -> None:
     import tempfile
     from pathlib import Path
 
-    from optimize.sweeps import run_sweeps
+    from optimize.sizing.pareto import run_sweeps
 
     sweep = next(s for s in study.pareto if s.against == "external_distance")
     one = dataclasses.replace(study, pareto=(sweep,))

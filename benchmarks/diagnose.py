@@ -1,11 +1,11 @@
 """Diagnosis: false discoveries on baseline-only data, and the time of a full diagnosis.
 
 Runs ``--cases`` random baseline-only data sets (as-built stiffness and magnet placement
-drawn at random, noise 0.1-0.4 mm, the 63-point bench path of ``optimize.synth``) through
-:func:`optimize.diagnose.diagnose`, counts the cases where any cause is named (goal: at
+drawn at random, noise 0.1-0.4 mm, the 63-point bench path of ``optimize.fitting.synth``) through
+:func:`optimize.fitting.diagnose.diagnose`, counts the cases where any cause is named (goal: at
 most 1 in 20), and times each diagnosis (goal: a 60-point data set in under 30 s). Then
 one torsion data set for comparison. ``--setup`` draws each case's nominal design from one
-of ``optimize.synth.SETUPS`` (e.g. ``near``: the magnet's face 15-22 mm from the tip, where
+of ``optimize.fitting.synth.SETUPS`` (e.g. ``near``: the magnet's face 15-22 mm from the tip, where
 the robot is multistable and the diagnosis fits along the bench's path) instead of using
 the demonstrator as it is.
 
@@ -25,8 +25,8 @@ import numpy as np
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).parent]
 
 from design.designfile import default_design  # noqa: E402
-from optimize.diagnose import diagnose  # noqa: E402
-from optimize.synth import SETUPS, setup_variant, synthesize_data  # noqa: E402
+from optimize.fitting.diagnose import diagnose  # noqa: E402
+from optimize.fitting.synth import SETUPS, setup_variant, synthesize_data  # noqa: E402
 
 
 def truth(rng: np.random.Generator, design) -> dict[str, float]:

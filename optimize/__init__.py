@@ -1,17 +1,24 @@
-"""ringpair.optimize: choosing numbers.
+"""ringpair.optimize: choosing numbers, in two domains that do not import each other.
 
-Design studies and their NLPs (:mod:`optimize.study`, :mod:`optimize.nlp`), measured
-data (:mod:`optimize.measurements`, :mod:`optimize.synth`), calibration
-(:mod:`optimize.calibrate`) and model diagnosis (:mod:`optimize.diagnose`).
+- :mod:`optimize.sizing`: the robot's dimensions by design NLPs (study files, Pareto
+  fronts);
+- :mod:`optimize.fitting`: the model against bench data (measurements, calibration,
+  profile likelihood, diagnosis, synthetic data).
+
 SI units are used for all inputs and outputs.
 """
 
-from optimize.calibrate import CalibrationResult, calibrate, cross_validate
-from optimize.diagnose import Diagnosis, diagnose
-from optimize.measurements import MeasurementError, Measurements, load_dataset, load_measurements
-from optimize.nlp import StudyResult, evaluate_design, pareto_values, solve_study
-from optimize.study import Study, StudyError, default_study, load_study
-from optimize.synth import synthesize
+from optimize.fitting.calibrate import CalibrationResult, calibrate, cross_validate
+from optimize.fitting.diagnose import Diagnosis, diagnose
+from optimize.fitting.measurements import (
+    MeasurementError,
+    Measurements,
+    load_dataset,
+    load_measurements,
+)
+from optimize.fitting.synth import synthesize
+from optimize.sizing.nlp import OptimizationResult, evaluate_design, optimize_design, pareto_values
+from optimize.sizing.studyfile import Study, StudyError, default_study, load_study
 
 __all__ = [
     "CalibrationResult",
@@ -20,7 +27,7 @@ __all__ = [
     "Measurements",
     "Study",
     "StudyError",
-    "StudyResult",
+    "OptimizationResult",
     "calibrate",
     "cross_validate",
     "default_study",
@@ -30,6 +37,6 @@ __all__ = [
     "load_measurements",
     "load_study",
     "pareto_values",
-    "solve_study",
+    "optimize_design",
     "synthesize",
 ]

@@ -13,8 +13,8 @@ import html
 from pathlib import Path
 
 from design.atomic import write_text
-from optimize.diagnose import Diagnosis, parameter_values
-from optimize.measurements import Measurements
+from optimize.fitting.diagnose import Diagnosis, parameter_values
+from optimize.fitting.measurements import Measurements
 from ringpair.html_page import img, table
 from ringpair.plots import plot_positions, plot_residuals
 

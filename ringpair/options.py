@@ -24,8 +24,8 @@ from design.params import Design
 from ringpair.angles import parse_angles
 
 if TYPE_CHECKING:
-    from optimize.measurements import Measurements
-    from optimize.study import Study
+    from optimize.fitting.measurements import Measurements
+    from optimize.sizing.studyfile import Study
 
 # No emoji codes: rich would print an angle range like 0:abc:5 as '0🔤5'.
 console = Console(emoji=False)
@@ -142,7 +142,7 @@ def one_angle(text: str, option: str) -> float:
 
 def study_from(path: Path | None) -> Study:
     """The study in ``path``, or the embedded demonstrator study when None."""
-    from optimize.study import StudyError, default_study, load_study
+    from optimize.sizing.studyfile import StudyError, default_study, load_study
 
     with bad_input(StudyError, OSError, UnicodeDecodeError):
         return default_study() if path is None else load_study(path)
@@ -151,7 +151,7 @@ def study_from(path: Path | None) -> Study:
 def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements]:
     """(design, measurements) from a data-set folder, or from a CSV with --design (default
     the demonstrator)."""
-    from optimize.measurements import MeasurementError, load_dataset, load_measurements
+    from optimize.fitting.measurements import MeasurementError, load_dataset, load_measurements
 
     if data.is_dir() and design is not None:
         raise UserError(

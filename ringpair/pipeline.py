@@ -4,8 +4,8 @@ Stages (each a function of the study and earlier stages' results, timed, cached 
 ``OUT/.stages/<stage>-<hash>.pkl`` so a rerun with the same inputs reuses it):
 
 1. ``baseline``: workspace of the starting design (the study's model);
-2. ``optimise``: the study's NLP (:func:`optimize.nlp.solve_study`);
-3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sweeps.run_sweeps`);
+2. ``optimise``: the study's NLP (:func:`optimize.sizing.nlp.optimize_design`);
+3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sizing.pareto.run_sweeps`);
 4. ``forward``: the starting and the chosen design re-simulated with the model for design
    work (:data:`design.model.DEFAULT_EFFECTS`);
 5. ``tolerance``: Monte Carlo over manufacturing tolerances (:data:`TOLERANCES`), the
@@ -42,7 +42,7 @@ from design.parameters import index
 from design.params import Design
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
-from optimize.study import Study
+from optimize.sizing.studyfile import Study
 from ringpair.tables import effect_shifts
 
 TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
@@ -200,8 +200,8 @@ def run_study(
     """Every stage of the main job; StageError names a failing stage (earlier stages'
     outputs stay valid on disk)."""
     from cad import build_parts
-    from optimize.nlp import solve_study
-    from optimize.sweeps import run_sweeps
+    from optimize.sizing.nlp import optimize_design
+    from optimize.sizing.pareto import run_sweeps
 
     tell = say or (lambda _: None)
     run = Run(out, study)
@@ -210,7 +210,7 @@ def run_study(
     tell("baseline workspace of the starting design")
     _stage(run, "baseline", key, lambda: sweep_workspace(study.base, model=model))
     tell("optimisation (IPOPT, multi-start)")
-    best = _stage(run, "optimise", key, lambda: solve_study(study))
+    best = _stage(run, "optimise", key, lambda: optimize_design(study))
     if not best.feasible or best.design is None:
         raise StageError("optimise", "the study is infeasible: " + best.report())
     chosen: Design = best.design
@@ -273,8 +273,8 @@ def _tree_hash(path: Path) -> str:
 
 
 def _diagnose(data: Path) -> dict[str, Any]:
-    from optimize.diagnose import diagnose
-    from optimize.measurements import load_dataset
+    from optimize.fitting.diagnose import diagnose
+    from optimize.fitting.measurements import load_dataset
 
     design, m = load_dataset(data)
     return diagnose(design, m).to_json()

@@ -24,11 +24,11 @@ from design.workspace import Workspace  # noqa: E402
 from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E402
 
 if TYPE_CHECKING:
-    from optimize.diagnose import Diagnosis
-    from optimize.measurements import Measurements
-    from optimize.nlp import StudyResult
-    from optimize.study import Study
-    from optimize.sweeps import ParetoResult
+    from optimize.fitting.diagnose import Diagnosis
+    from optimize.fitting.measurements import Measurements
+    from optimize.sizing.nlp import OptimizationResult
+    from optimize.sizing.pareto import ParetoResult
+    from optimize.sizing.studyfile import Study
 
 REACH = "#1f77b4"
 LOOP = "#d62728"
@@ -222,7 +222,7 @@ def plot_branch_diagram(
     _save(fig, path)
 
 
-def plot_fronts(pareto: ParetoResult, best: StudyResult, study: Study, path: Path) -> None:
+def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, path: Path) -> None:
     """Objective against each swept bound, with the unconstrained optimum marked."""
     sweeps = [(a, pts) for a, pts in pareto.sweeps.items() if pts]
     fig, axes = plt.subplots(1, len(sweeps), figsize=(5 * len(sweeps), 3.8), squeeze=False)

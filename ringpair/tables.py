@@ -19,8 +19,8 @@ from design.params import Design
 from design.units import MM, MM3, MPA
 
 if TYPE_CHECKING:
-    from optimize.study import Study
-    from optimize.sweeps import ParetoPoint
+    from optimize.sizing.pareto import ParetoPoint
+    from optimize.sizing.studyfile import Study
 
 POSE_COLUMNS = (
     "theta1_deg",

@@ -60,9 +60,9 @@ def calibrate(
     """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
     or a CSV, spec/formats.md) by least squares with exact Jacobians; print the estimates
     with their standard errors, and the RMS and largest tip error."""
-    from optimize.calibrate import FREE_PARAMETERS
-    from optimize.calibrate import calibrate as fit_parameters
-    from optimize.profile import profile_intervals
+    from optimize.fitting.calibrate import FREE_PARAMETERS
+    from optimize.fitting.calibrate import calibrate as fit_parameters
+    from optimize.fitting.likelihood import profile_intervals
 
     if profile and priors:
         raise UserError("--profile is for fits without --priors (it profiles the data's misfit)")

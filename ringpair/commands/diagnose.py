@@ -35,7 +35,7 @@ def diagnose(
     effects the data call for (judged by BIC and cross-validated error) and prints the
     causes with their evidence and the fitted physical parameters.
     """
-    from optimize.diagnose import diagnose as run_diagnosis
+    from optimize.fitting.diagnose import diagnose as run_diagnosis
     from ringpair.diagnosis_report import write_report
 
     d, m = measured_data(data, design_path)

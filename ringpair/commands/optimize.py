@@ -27,9 +27,9 @@ from ringpair.options import (
 from ringpair.tables import pareto_rows, write_rows
 
 if TYPE_CHECKING:
-    from optimize.nlp import StudyResult
-    from optimize.study import Study
-    from optimize.sweeps import ParetoResult
+    from optimize.sizing.nlp import OptimizationResult
+    from optimize.sizing.pareto import ParetoResult
+    from optimize.sizing.studyfile import Study
 
 
 @click.command()
@@ -50,7 +50,7 @@ def optimize(
     same study resumes. Exit 0 also for an infeasible study: the conflict report is
     printed and written to summary.json; exit 2 for a bad study file.
     """
-    from optimize.nlp import solve_study
+    from optimize.sizing.nlp import optimize_design
     from ringpair.plots import plot_fronts, plot_workspaces
 
     study = study_from(study_path)
@@ -59,7 +59,7 @@ def optimize(
     out = out or default_out(study.name, "optimize")
     out.mkdir(parents=True, exist_ok=True)
     with console.status(f"solving '{study.name}' ({study.starts} starts per material)"):
-        best = solve_study(study)
+        best = optimize_design(study)
     console.print(best.report())
     model = RingPairModel(study.effects)
     with console.status("forward simulation of the starting and the best design"):
@@ -99,7 +99,7 @@ def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) ->
     """The study's Pareto sweeps on Dask, with a progress bar."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-    from optimize.sweeps import run_sweeps
+    from optimize.sizing.pareto import run_sweeps
 
     with Progress(
         "[progress.description]{task.description}",
@@ -118,13 +118,13 @@ def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) ->
 
 def summary(
     study: Study,
-    best: StudyResult,
+    best: OptimizationResult,
     start: Workspace,
     end: Workspace | None,
     pareto: ParetoResult | None,
 ) -> dict:
     """The JSON summary (SI plus the forward-simulated radii in mm)."""
-    from optimize.sweeps import is_monotone
+    from optimize.sizing.pareto import is_monotone
 
     doc: dict[str, object] = {
         "study": study.name,

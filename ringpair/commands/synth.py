@@ -120,8 +120,8 @@ def synth(
     (with a sequence column: the acquisition order). Configurations without a stable
     equilibrium are dropped and counted.
     """
-    from optimize.measurements import save_dataset
-    from optimize.synth import synthesize_data
+    from optimize.fitting.measurements import save_dataset
+    from optimize.fitting.synth import synthesize_data
 
     d = design_from(design)
     model = model_from(effects)

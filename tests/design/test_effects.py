@@ -234,7 +234,7 @@ def test_strides_on_smooth_stretches_give_the_states_of_single_sub_steps(monkeyp
     twisting transmissions (which snaps), the states and the snaps are those of 1-degree
     steps all the way."""
     import design.equilibrium as equilibrium
-    from optimize.synth import default_commands
+    from optimize.fitting.synth import default_commands
 
     model = RingPairModel(frozenset({"torsion", "large_deflection"}))
     params = set_params(model.parameters(DEMO), bending_rigidity_scale=0.3)

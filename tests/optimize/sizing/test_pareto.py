@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from studies import SMALL
 
-from optimize.nlp import solve_study
-from optimize.study import loads_study
-from optimize.sweeps import _solve_point, is_monotone, point_key, run_sweeps
+from optimize.sizing.nlp import optimize_design
+from optimize.sizing.pareto import _solve_point, is_monotone, point_key, run_sweeps
+from optimize.sizing.studyfile import loads_study
 
 SWEEP = (
     SMALL
@@ -30,7 +30,7 @@ def test_sweep_on_two_dask_workers_is_monotone_and_resumes(tmp_path):
     assert is_monotone(points)  # a farther magnet never helps the disc radius here
     assert points[-1].objective < points[0].objective
     # Each point is the NLP with that bound, solved here in-process the same way.
-    direct = solve_study(study, epsilon={"external_distance": points[1].epsilon})
+    direct = optimize_design(study, epsilon={"external_distance": points[1].epsilon})
     assert points[1].objective == direct.objective
     again = run_sweeps(study, tmp_path, workers=2)
     assert again.solved == 0 and again.resumed == 3

@@ -1,4 +1,4 @@
-"""Profile-likelihood intervals (optimize.profile) against the linear theory they reduce
+"""Profile-likelihood intervals (optimize.fitting.likelihood) against the linear theory they reduce
 to, and at a parameter's bound."""
 
 from __future__ import annotations
@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 from design.designfile import default_design
-from optimize.calibrate import calibrate, default_free
-from optimize.profile import profile_intervals, profile_sigma
-from optimize.synth import synthesize_data
+from optimize.fitting.calibrate import calibrate, default_free
+from optimize.fitting.likelihood import profile_intervals, profile_sigma
+from optimize.fitting.synth import synthesize_data
 
 DEMO = default_design()
 

@@ -9,7 +9,7 @@ import pytest
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import RingPairModel
 from design.parameters import index
-from optimize.synth import default_commands, synthesize, synthesize_data
+from optimize.fitting.synth import default_commands, synthesize, synthesize_data
 
 
 def test_default_path_is_a_bench_sweep_both_ways():

@@ -10,7 +10,7 @@ import pytest
 from design.equilibrium import solve_equilibria, solve_sequence
 from design.model import RingPairModel
 from design.parameters import index
-from optimize.calibrate import (
+from optimize.fitting.calibrate import (
     PAPER_FIELD_GRID,
     PAPER_STIFFNESS_GRID,
     SENSITIVE,
@@ -22,8 +22,8 @@ from optimize.calibrate import (
     prediction_sensitivities,
     two_factor_parameters,
 )
-from optimize.measurements import make_measurements
-from optimize.synth import default_commands, synthesize, synthesize_data
+from optimize.fitting.measurements import make_measurements
+from optimize.fitting.synth import default_commands, synthesize, synthesize_data
 
 
 def _fd_columns(solve, params, names, rel=1e-6):

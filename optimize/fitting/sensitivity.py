@@ -25,7 +25,7 @@ from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.friction import play, play_step
 from design.model import RingPairModel
 from design.parameters import NAMES, index
-from optimize.measurements import Measurements
+from optimize.fitting.measurements import Measurements
 
 THREADS = 2
 COMPILE_LIMIT = 12000

@@ -2,7 +2,7 @@
 
 Method (the result format is spec/formats.md's diagnosis JSON):
 
-1. Calibrate the baseline (:func:`optimize.calibrate.calibrate`, its default free
+1. Calibrate the baseline (:func:`optimize.fitting.calibrate.calibrate`, its default free
    parameters) and cross-validate it over held-out configurations.
 2. Look for structure in its residuals: regress them on smooth functions of each candidate
    cause's signature (each ring angle and their difference as two-harmonic Fourier series,
@@ -10,7 +10,7 @@ Method (the result format is spec/formats.md's diagnosis JSON):
    order as a cubic, the direction of travel as a sign) and F-test each against the
    residual noise (:func:`residual_structure`).
 3. Greedy forward selection: fit every candidate effect added to the current model (its
-   own parameters freed, :data:`optimize.calibrate.EFFECT_FREE`); take the candidates in
+   own parameters freed, :data:`optimize.fitting.calibrate.EFFECT_FREE`); take the candidates in
    order of the Bayesian information criterion, n ln(RSS'/RSS) + k' ln n, and accept the
    first whose BIC falls by more than BIC_DROP (very strong evidence, Kass & Raftery 1995)
    and whose cross-validated RMSE falls by more than CV_GAIN; repeat while one is accepted
@@ -18,7 +18,7 @@ Method (the result format is spec/formats.md's diagnosis JSON):
    data give sigma).
 4. Name each accepted cause with its evidence (the residual structure it removes, the
    cross-validated gain, its parameters as the final model estimates them with 1-sigma
-   profile-likelihood intervals, :mod:`optimize.profile`), and say whether structure
+   profile-likelihood intervals, :mod:`optimize.fitting.likelihood`), and say whether structure
    remains.
 
 Data with an acquisition order are fitted along the bench's path wherever that changes
@@ -46,7 +46,7 @@ from design.model import EFFECTS, RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
 from design.sections import tube_torsional_rigidity
-from optimize.calibrate import (
+from optimize.fitting.calibrate import (
     EFFECT_FREE,
     FREE_PARAMETERS,
     CalibrationResult,
@@ -56,8 +56,8 @@ from optimize.calibrate import (
     predict,
     row_sigma,
 )
-from optimize.measurements import Measurements
-from optimize.profile import Interval, profile_intervals
+from optimize.fitting.likelihood import Interval, profile_intervals
+from optimize.fitting.measurements import Measurements
 
 BIC_DROP = 10.0
 """Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
@@ -107,7 +107,7 @@ class Fit:
     rss: float
     n: int
     ordered: bool | Literal["driven"] = False
-    """How the fit solved the configurations (see :func:`optimize.calibrate.predict`)."""
+    """How the fit solved the configurations (see :func:`optimize.fitting.calibrate.predict`)."""
 
     @property
     def name(self) -> str:
@@ -575,7 +575,7 @@ def diagnose(
 
     # The causes' parameters as the final model estimates them, with profile-likelihood
     # intervals: the linearised errors are too small where parameters trade off along a
-    # curved valley (optimize.profile).
+    # curved valley (optimize.fitting.likelihood).
     own = [p for step in accepted_steps for p in EFFECT_FREE[step[0]]]
     profiles = {}
     if own:

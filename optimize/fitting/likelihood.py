@@ -1,6 +1,6 @@
 """Profile-likelihood intervals of calibrated parameters.
 
-The Gauss-Newton standard error of :func:`optimize.calibrate.calibrate` is exact only
+The Gauss-Newton standard error of :func:`optimize.fitting.calibrate.calibrate` is exact only
 where the model is linear in its parameters over the error's range. Where parameters
 trade off along a curved valley (a far, weak external field: the rod's compliance and the
 magnet's distance are nearly degenerate, and the transmissions' torsional rigidities
@@ -29,8 +29,8 @@ from typing import Literal
 import numpy as np
 
 from design.params import Design
-from optimize.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
-from optimize.measurements import Measurements
+from optimize.fitting.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
+from optimize.fitting.measurements import Measurements
 
 TOLERANCE = 0.05
 """An interval end is found when |r| is within this of 1. [-]"""
@@ -81,7 +81,7 @@ def profile_intervals(
 ) -> dict[str, Interval]:
     """1-sigma profile-likelihood intervals of ``names`` (free parameters of ``fit``).
 
-    ordered, sigma : as the fit was made (see :func:`optimize.calibrate.calibrate`).
+    ordered, sigma : as the fit was made (see :func:`optimize.fitting.calibrate.calibrate`).
     """
     _check(fit)
     free = fit.names

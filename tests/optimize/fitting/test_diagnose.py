@@ -2,8 +2,8 @@
 
 Each test draws its design perturbation, noise and effect strength at random at test time
 (the seed is in every failure message) inside plausible ranges, synthesises a bench data
-set with :mod:`optimize.synth`, and hands only the data and the nominal design to
-:func:`optimize.diagnose.diagnose`: no test passes by knowing what was planted except
+set with :mod:`optimize.fitting.synth`, and hands only the data and the nominal design to
+:func:`optimize.fitting.diagnose.diagnose`: no test passes by knowing what was planted except
 through the data.
 """
 
@@ -16,10 +16,10 @@ import pytest
 
 from design.designfile import default_design
 from design.params import Design
-from optimize.calibrate import EFFECT_FREE
-from optimize.diagnose import diagnose, report_key, residual_structure
-from optimize.profile import profile_sigma
-from optimize.synth import SETUPS, setup_variant, synthesize_data
+from optimize.fitting.calibrate import EFFECT_FREE
+from optimize.fitting.diagnose import diagnose, report_key, residual_structure
+from optimize.fitting.likelihood import profile_sigma
+from optimize.fitting.synth import SETUPS, setup_variant, synthesize_data
 
 DEMO = default_design()
 
@@ -80,7 +80,7 @@ def test_diagnosis_names_the_planted_effect_and_recovers_its_parameters(planted,
     why = f"seed {seed}, truth {truth}, noise {noise:.2f} mm: {result.to_json()['causes']}"
     assert {c.name for c in result.causes} == set(planted), why
     # Coverage: each effect's own parameters within 4 sigma of the reported uncertainty,
-    # the profile likelihood (optimize.profile): the truth's profile r, and the reported
+    # the profile likelihood (optimize.fitting.likelihood): the truth's profile r, and the reported
     # 1-sigma interval around the estimate.
     final = result.final
     own = [n for c in result.causes for n in EFFECT_FREE[c.name]]
@@ -143,7 +143,7 @@ def test_residual_structure_finds_a_pattern_and_not_noise():
 def fit_from_truth(effects: tuple[str, ...], seed: int):
     """The data of ``draw(effects, seed)`` and a calibration started at the truth, each
     configuration solved on its own: (design, truth, noise, measurements, fit)."""
-    from optimize.calibrate import calibrate, default_free
+    from optimize.fitting.calibrate import calibrate, default_free
 
     design, truth, noise = draw(effects, seed)
     m = synthesize_data(design, effects, noise_mm=noise, seed=seed, params_override=truth)
@@ -160,8 +160,8 @@ def test_a_fit_along_the_path_leaves_the_basin_where_the_robot_does_not_snap():
     fit started from the truth without following the path stops where the transmissions
     are too stiff to snap (RMS 1.26 mm against 0.21 mm noise), and there the path no
     longer matters, so nothing local leads back. The diagnosis' full fits scan the misfit
-    along the path (:func:`optimize.diagnose._scan`) and must end at the noise."""
-    from optimize.diagnose import _fit
+    along the path (:func:`optimize.fitting.diagnose._scan`) and must end at the noise."""
+    from optimize.fitting.diagnose import _fit
 
     effects = ("torsion", "gravity")
     design, truth, noise, m, stuck = fit_from_truth(effects, 2884561028)
@@ -179,7 +179,7 @@ def test_the_profile_likelihood_covers_torsion_where_the_linearised_error_does_n
     nearly degenerate, and the transmissions' stiffness follows them along a curved valley.
     The fit (started at the truth, so not a stuck fit) lies over 4 linearised standard
     errors from the true catheter stiffness; the profile likelihood (the reported
-    uncertainty, optimize.profile) puts both truths within 4 sigma."""
+    uncertainty, optimize.fitting.likelihood) puts both truths within 4 sigma."""
     effects = ("torsion",)
     design, truth, _, m, fit = fit_from_truth(effects, 2313850729)
     name = "catheter_torsion_scale"

@@ -22,7 +22,7 @@ from design.model import RingPairModel, model_for
 from design.parameters import NAMES, index
 from design.params import Design
 from design.suggest import did_you_mean
-from optimize.measurements import Measurements, make_measurements
+from optimize.fitting.measurements import Measurements, make_measurements
 
 VIEWS = ("3d", "top")
 """'3d': x, y and z measured; 'top': a camera above the robot sees x and y only."""

@@ -3,7 +3,7 @@
 Nonlinear least squares (``scipy.optimize.least_squares``, trust region reflective, with
 bounds) on the position residuals weighted by their one-sigma uncertainty, with exact
 Jacobians from the CasADi model by the implicit function theorem at each equilibrium
-(:mod:`optimize.sensitivity`: dx/dp = -(dr/dx)^-1 dr/dp, through ``model.pose`` to the
+(:mod:`optimize.fitting.sensitivity`: dx/dp = -(dr/dx)^-1 dr/dp, through ``model.pose`` to the
 tip, and through the friction play for ``hysteresis``).
 
 Parameters are fitted in well-scaled units: scale factors, moduli and remanences by
@@ -19,7 +19,7 @@ depends on the external remanence and the bending rigidity only through their ra
 (their correlation is reported as +-1 and the fit says so in ``message``).
 
 The paper's method (an exhaustive grid over a stiffness scale and a field scale) is kept
-as :func:`grid_search_two_factors` (:mod:`optimize.paper_grid`, re-exported here). SI
+as :func:`grid_search_two_factors` (:mod:`optimize.fitting.paper_grid`, re-exported here). SI
 units are used for all inputs and outputs; the ``*_mm`` figures of the results are
 millimetres.
 """
@@ -39,15 +39,15 @@ from design.model import RingPairModel, model_for
 from design.parameters import index
 from design.params import Design
 from design.units import DEG, GRAM, MM, MPA
-from optimize.measurements import Measurements
-from optimize.paper_grid import (
+from optimize.fitting.measurements import Measurements
+from optimize.fitting.paper_grid import (
     PAPER_FIELD_GRID,
     PAPER_STIFFNESS_GRID,
     GridResult,
     grid_search_two_factors,
     two_factor_parameters,
 )
-from optimize.sensitivity import (
+from optimize.fitting.sensitivity import (
     SENSITIVE,
     Prediction,
     position_errors,
@@ -612,4 +612,4 @@ def cross_validate(
 
 
 if set(FREE_PARAMETERS) != set(SENSITIVE):  # pragma: no cover - a programming error
-    raise ImportError("FREE_PARAMETERS and optimize.sensitivity.SENSITIVE must name the same")
+    raise ImportError("FREE_PARAMETERS and sensitivity.SENSITIVE must name the same")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from design.designfile import DesignError
-from optimize.measurements import (
+from optimize.fitting.measurements import (
     MeasurementError,
     load_dataset,
     load_measurements,

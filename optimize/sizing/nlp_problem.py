@@ -1,5 +1,5 @@
 """The design NLP's formulation: variables, equilibrium constraints, objectives and
-constraint groups of one study, built as CasADi expressions (solved by :mod:`optimize.nlp`).
+constraint groups of one study, built as CasADi expressions (solved by :mod:`optimize.sizing.nlp`).
 
 Formulation (one material combination, one start):
 
@@ -59,7 +59,7 @@ from design.geometry import (
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.parameters import NAMES, index
-from optimize.study import DEG, MM, MM3
+from optimize.sizing.studyfile import DEG, MM, MM3
 
 SMOOTH_MAX_SHARPNESS = 200.0
 """Sharpness of the log-sum-exp maximum used for the reach widths, in units of the

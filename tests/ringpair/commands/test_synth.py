@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from optimize.measurements import load_dataset
+from optimize.fitting.measurements import load_dataset
 from ringpair.cli import cli
 
 

@@ -8,8 +8,8 @@ import math
 import pytest
 
 from design.designfile import default_design, save_design
-from optimize.materials import MATERIALS, material
-from optimize.study import (
+from optimize.sizing.materials import MATERIALS, material
+from optimize.sizing.studyfile import (
     Study,
     StudyError,
     default_study,

@@ -22,9 +22,9 @@ from design.model import RingPairModel
 from design.ring_coupling import coupling_coefficient, coupling_torques
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.workspace import LOOP_SAMPLES, Workspace, sweep_workspace
-from optimize.materials import material
-from optimize.nlp import evaluate_design, pareto_values, solve_study
-from optimize.study import Study, default_study, loads_study
+from optimize.sizing.materials import material
+from optimize.sizing.nlp import evaluate_design, optimize_design, pareto_values
+from optimize.sizing.studyfile import Study, default_study, loads_study
 
 L_MM = 150.0
 BETA = math.radians(45.0)
@@ -142,7 +142,7 @@ def test_distance_maximising_the_disc_radius_closed_form(known_study, hessian):
     d_star = 4 * L_MM * (3 * math.sin(BETA) ** 2 - 1) / (3 * math.cos(BETA)) * 1e-3
     distance, disc, semi_axes = known_optimum(known_study)
     assert distance == pytest.approx(d_star, rel=1e-4)  # the continuous loop's optimum
-    result = solve_study(replace(known_study, hessian=hessian))
+    result = optimize_design(replace(known_study, hessian=hessian))
     assert result.feasible
     assert all(s.accepted for s in result.starts)
     assert result.values["external_distance"] == pytest.approx(distance, rel=1e-6)
@@ -152,7 +152,7 @@ def test_distance_maximising_the_disc_radius_closed_form(known_study, hessian):
 
 def test_epsilon_bound_moves_the_optimum_onto_it(known_study):
     # Beyond d* the disc shrinks with distance, so external_distance >= 160 mm binds.
-    result = solve_study(known_study, epsilon={"external_distance": 0.160})
+    result = optimize_design(known_study, epsilon={"external_distance": 0.160})
     assert result.values["external_distance"] == pytest.approx(0.160, rel=1e-7)
     assert "epsilon.external_distance" in result.active
     back = pickle.loads(pickle.dumps(result))
@@ -162,8 +162,8 @@ def test_epsilon_bound_moves_the_optimum_onto_it(known_study):
 def test_pareto_front_against_magnet_distance_is_monotone(known_study):
     # Requiring the magnet farther away can only cost disc radius; below d* it is free.
     eps = [0.12, 0.15, 0.2, 0.3]
-    radius = [solve_study(known_study, epsilon={"external_distance": e}).objective for e in eps]
-    free = solve_study(known_study).objective
+    radius = [optimize_design(known_study, epsilon={"external_distance": e}).objective for e in eps]
+    free = optimize_design(known_study).objective
     assert radius[0] == pytest.approx(free, rel=1e-9)
     assert all(a > b for a, b in zip(radius, radius[1:], strict=False))
 
@@ -179,10 +179,10 @@ def test_pareto_values_span_the_free_bounds():
 
 
 def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
-    import optimize.nlp as nlp
+    import optimize.sizing.nlp as nlp
 
     # A start that cannot be evaluated is rejected with its reason; the next one solves.
-    result = solve_study(known_study, starts=[{"external_distance": math.nan}, {}])
+    result = optimize_design(known_study, starts=[{"external_distance": math.nan}, {}])
     first, second = result.starts
     assert not first.accepted and "not finite: external_distance" in first.message
     assert second.accepted and result.feasible
@@ -201,7 +201,7 @@ def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(nlp, "_solve_one", flaky)
-    result = solve_study(known_study)
+    result = optimize_design(known_study)
     assert calls == [1, 2]
     assert result.starts[0].status == "error: RuntimeError"
     assert result.starts[0].message == "IPOPT crashed"
@@ -216,7 +216,7 @@ def _dipole_field(offset, moment):
 
 def test_optimum_rechecked_by_forward_simulation_of_its_design_file(tmp_path):
     study = loads_study(SMALL)
-    result = solve_study(study)
+    result = optimize_design(study)
     assert result.feasible, result.report()
     path = tmp_path / "best.toml"
     save_design(result.design, path)
@@ -337,7 +337,7 @@ twist_limit_deg = 180.0
 [solver]
 starts = 2
 """
-    result = solve_study(loads_study(text))
+    result = optimize_design(loads_study(text))
     assert not result.feasible
     assert result.design is None
     assert all(not s.accepted for s in result.starts)
@@ -355,7 +355,7 @@ starts = 2
 def test_torsion_study_optimum_holds_in_forward_simulation():
     # With the torsion effect the twist is the solved tip-angle lag itself.
     study = loads_study(SMALL.replace('objective = "disc_radius"', 'effects = "torsion"'))
-    result = solve_study(study)
+    result = optimize_design(study)
     assert result.feasible, result.report()
     model = RingPairModel(study.effects)
     ws = sweep_workspace(result.design, np.deg2rad(15.0), model=model)

@@ -37,7 +37,7 @@ external_distance_mm = [60.0, 200.0]      # rest tip (straight robot) to the ext
                                           # direction from the tip to that centre
 
 [materials]                               # candidates; each combination is its own NLP
-catheter = ["ptfe", "pebax_7233", "nylon_12"]   # names: optimize.materials.MATERIALS
+catheter = ["ptfe", "pebax_7233", "nylon_12"]   # names: optimize.sizing.materials.MATERIALS
 wire = ["niti"]                           # absent: the tube keeps the base design's
                                           # E, Poisson ratio and density
 
@@ -97,7 +97,7 @@ from design.model import EFFECTS
 from design.params import Design
 from design.suggest import did_you_mean
 from design.units import DEG, MM, MM3, MPA
-from optimize.materials import MATERIALS
+from optimize.sizing.materials import MATERIALS
 
 
 class StudyError(ValueError):
@@ -570,5 +570,5 @@ def load_study(path: str | os.PathLike[str]) -> Study:
 
 def default_study() -> Study:
     """The embedded default study: the demonstrator's set-up, shipped with the package."""
-    text = resources.files("optimize").joinpath("data/default_study.toml").read_text("utf-8")
+    text = resources.files("optimize.sizing").joinpath("data/default_study.toml").read_text("utf-8")
     return loads_study(text, source="default study (embedded)")

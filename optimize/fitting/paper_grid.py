@@ -17,8 +17,8 @@ from design.model import model_for
 from design.parameters import index
 from design.params import Design
 from design.units import MM
-from optimize.measurements import Measurements
-from optimize.sensitivity import position_errors, predict
+from optimize.fitting.measurements import Measurements
+from optimize.fitting.sensitivity import position_errors, predict
 
 PAPER_STIFFNESS_GRID = np.linspace(2 / 3, 4 / 3, 10)
 """The paper's K_E grid, 0.009 .. 0.018 in steps of 0.001 (10 values), relative to its

@@ -15,8 +15,8 @@ import numpy as np
 from design.geometry import external_distance, magnet_centre_at
 from design.parameters import index, parameter_vector
 from design.params import Design
-from optimize.materials import Material, material
-from optimize.study import PARETO_QUANTITIES, Study
+from optimize.sizing.materials import Material, material
+from optimize.sizing.studyfile import PARETO_QUANTITIES, Study
 
 
 def free_values(study: Study, design: Design) -> np.ndarray:

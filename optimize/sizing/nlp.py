@@ -1,4 +1,4 @@
-"""Solving the design NLP of a study (:mod:`optimize.nlp_problem`) with IPOPT, with exact
+"""Solving the design NLP of a study (:mod:`optimize.sizing.nlp_problem`) with IPOPT, with exact
 derivatives through the model's own CasADi expressions; evaluating designs; the results.
 
 Multi-start: start 1 is the base design, the others are drawn uniformly in the bounds
@@ -25,9 +25,14 @@ from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
 from design.parameters import NAMES, parameter_vector
 from design.params import Design
-from optimize.materials import Material, material
-from optimize.nlp_designs import design_with, free_values, group_bounds, material_combinations
-from optimize.nlp_problem import (
+from optimize.sizing.materials import Material, material
+from optimize.sizing.nlp_designs import (
+    design_with,
+    free_values,
+    group_bounds,
+    material_combinations,
+)
+from optimize.sizing.nlp_problem import (
     GROUPS,
     METRICS,
     Core,
@@ -37,8 +42,14 @@ from optimize.nlp_problem import (
     problem,
     restoration,
 )
-from optimize.nlp_results import Conflict, ConstraintState, Evaluation, StartResult, StudyResult
-from optimize.study import ParetoSweep, Study
+from optimize.sizing.nlp_results import (
+    Conflict,
+    ConstraintState,
+    Evaluation,
+    OptimizationResult,
+    StartResult,
+)
+from optimize.sizing.studyfile import ParetoSweep, Study
 
 FEASIBILITY_TOLERANCE = 1e-6
 """A constraint row counts as satisfied within this, in its group's file unit, plus this
@@ -446,12 +457,12 @@ def _conflicts(
     return float(slack.sum()), ranked, tuple(limiting)
 
 
-def solve_study(
+def optimize_design(
     study: Study,
     *,
     epsilon: Mapping[str, float] | None = None,
     starts: Sequence[Mapping[str, float]] | None = None,
-) -> StudyResult:
+) -> OptimizationResult:
     """Solve the study's design NLP from several starts; return the best accepted design.
 
     epsilon : Pareto bounds by quantity (PARETO_QUANTITIES: ``catheter_outer_diameter``
@@ -516,7 +527,7 @@ def solve_study(
                 continue
             if total < best_total:
                 best_total, conflicts, limiting = total, found, bounds_
-        return StudyResult(
+        return OptimizationResult(
             study=study.name,
             feasible=False,
             objective=math.nan,
@@ -549,7 +560,7 @@ def solve_study(
             active.append(f"bound.{b.name}.high")
     design = design_with(study, best.v, cat, wire, name=f"{study.name}-optimum")
     design = replace(design, description=f"optimum of study {study.name!r} (ringpair optimize)")
-    return StudyResult(
+    return OptimizationResult(
         study=study.name,
         feasible=True,
         objective=best.start.objective,

@@ -1,8 +1,8 @@
 """Pareto studies: epsilon-constraint sweeps, one design NLP per point, on Dask.
 
 Each point of a sweep bounds one quantity (catheter outer diameter and magnet volume from
-above, external-magnet distance from below, :data:`optimize.study.PARETO_QUANTITIES`) and
-maximises the study's objective with :func:`optimize.nlp.solve_study`. Points are
+above, external-magnet distance from below, :data:`optimize.sizing.studyfile.PARETO_QUANTITIES`) and
+maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points are
 independent, so they run as Dask tasks: on a local cluster (processes, one thread each)
 by default, or on an existing cluster given its scheduler address. Each finished point
 is stored under ``out_dir/points/`` keyed by a hash of the study and the point, so a rerun
@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from optimize.nlp import StudyResult, pareto_values, solve_study
-from optimize.study import Study
+from optimize.sizing.nlp import OptimizationResult, optimize_design, pareto_values
+from optimize.sizing.studyfile import Study
 
 Progress = Callable[[int, int], None]
 """progress(done, total), called as points finish (resumed ones count at once)."""
@@ -45,7 +45,7 @@ class ParetoPoint:
 
     against: str
     epsilon: float
-    result: StudyResult | None
+    result: OptimizationResult | None
     error: str = ""
     resumed: bool = False
 
@@ -76,9 +76,11 @@ def point_key(study: Study, against: str, epsilon: float) -> str:
     return hashlib.sha256(blob).hexdigest()[:24]
 
 
-def _solve_point(study: Study, against: str, epsilon: float) -> tuple[StudyResult | None, str]:
+def _solve_point(
+    study: Study, against: str, epsilon: float
+) -> tuple[OptimizationResult | None, str]:
     try:
-        return solve_study(study, epsilon={against: epsilon}), ""
+        return optimize_design(study, epsilon={against: epsilon}), ""
     except Exception as exc:  # a failed point is an answer, not the end of the sweep
         return None, f"{type(exc).__name__}: {exc}"
 

@@ -79,8 +79,8 @@ class StartResult:
 
 
 @dataclass(frozen=True)
-class StudyResult:
-    """Outcome of :func:`solve_study` (picklable: plain data and a Design).
+class OptimizationResult:
+    """Outcome of :func:`optimize_design` (picklable: plain data and a Design).
 
     feasible : some start was accepted; then ``design`` is the best one.
     objective : the study's objective of the best design (the metric in SI for one
@@ -135,7 +135,7 @@ class StudyResult:
 class Evaluation:
     """A design evaluated by forward simulation on the study's sampled configurations.
 
-    objective : as in StudyResult; metrics : see METRICS [SI]; constraints : every group.
+    objective : as in OptimizationResult; metrics : see METRICS [SI]; constraints : every group.
     converged, stable : all sampled equilibria converged / are stable.
     violation : sum over groups of the violation in file units (0 when feasible).
     """
