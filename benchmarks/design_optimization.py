@@ -38,7 +38,7 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 from design.workspace import sweep_workspace  # noqa: E402
 from optimize.sizing.nlp import evaluate_design, optimize_design  # noqa: E402
-from optimize.sizing.nlp_designs import design_with, material_combinations  # noqa: E402
+from optimize.sizing.nlp_designs import candidate_design, material_combinations  # noqa: E402
 from optimize.sizing.studyfile import default_study  # noqa: E402
 
 PENALTY = 10.0
@@ -71,7 +71,7 @@ def main() -> None:
         cat, wire = combos[int(round(x[-1]))]
         values = lo + (hi - lo) * x[:-1]
         names = (cat.name if cat else None, wire.name if wire else None)
-        return design_with(study, values, cat, wire), names
+        return candidate_design(study, values, cat, wire), names
 
     def penalised(x: np.ndarray) -> float:
         nonlocal evaluations

@@ -29,7 +29,7 @@ import numpy as np
 from design.designfile import default_design, design_from_dict, design_to_dict
 from design.equilibrium import TOLERANCE, kernels, solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
-from design.params import Design
+from design.records import Design
 
 SAME = 1e-5
 """Two states are the same when their tips are this close. [m]"""

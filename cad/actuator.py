@@ -24,7 +24,7 @@ from cad.selflocking import (
     friction_coefficient,
     self_locking,
 )
-from design.params import Design
+from design.records import Design
 
 
 @dataclass(frozen=True)

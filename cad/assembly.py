@@ -24,7 +24,7 @@ from cad.mounting import MountingDims, MountingPieces
 from cad.process import mm
 from cad.solids import cylinder, frame, tube
 from design.geometry import rest_position, ring_centres
-from design.params import Design
+from design.records import Design
 
 Colour = tuple[float, float, float]
 

@@ -44,7 +44,7 @@ from cad.process import PrintProcess, get_process
 from cad.render import render_all
 from cad.selflocking import SelfLocking
 from design.atomic import write_text
-from design.params import Design
+from design.records import Design
 from design.units import GRAM, MM3
 
 

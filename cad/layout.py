@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from cad.errors import require
 from cad.gears import WormDrive, WormDriveSpec
 from cad.process import PrintProcess, mm
-from design.params import Design
+from design.records import Design
 
 HEX_ENGAGEMENT_MM = 15.0
 

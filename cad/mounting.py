@@ -35,7 +35,7 @@ from cad.process import PrintProcess, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
 from design.geometry import WIRE_CLEARANCE, ring_clears_wire
-from design.params import Design
+from design.records import Design
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ SI units are used for all inputs and outputs.
 from design.designfile import DesignError, default_design, load_design, save_design
 from design.equilibrium import Equilibria, solve_design, solve_equilibria
 from design.model import EFFECTS, RingPairModel
-from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
+from design.records import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 
 __all__ = [
     "EFFECTS",

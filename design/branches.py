@@ -25,7 +25,7 @@ from design.equilibrium import (
     stable_states,
 )
 from design.model import RingPairModel
-from design.parameters import index
+from design.registry import index
 
 HALVINGS = 6
 """Times a continuation step in lambda is halved before the branch is taken to end."""

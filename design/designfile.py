@@ -1,7 +1,7 @@
 """Design files (TOML, spec/formats.md): load, validate, save.
 
 Files speak millimetres, megapascals, tesla and kg/m^3 as their key names say; the
-returned :class:`~design.params.Design` is in SI. Every bad value raises
+returned :class:`~design.records.Design` is in SI. Every bad value raises
 :class:`DesignError` whose message names the key, what was expected and what was found.
 """
 
@@ -26,7 +26,7 @@ from design.geometry import (
     ring_centres,
     ring_clears_wire,
 )
-from design.params import Design, Environment, ExternalMagnet, Robot, Tip, Tube
+from design.records import Design, Environment, ExternalMagnet, Robot, Tip, Tube
 from design.suggest import did_you_mean
 from design.units import DEG, GRAM, MM, MPA
 

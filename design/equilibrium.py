@@ -53,8 +53,8 @@ from numpy.typing import ArrayLike
 from design.compiled import BufferEvaluator, compile_functions, evaluate_columns
 from design.friction import play
 from design.model import RingPairModel
-from design.parameters import index
-from design.params import Design
+from design.records import Design
+from design.registry import index
 
 TOLERANCE = 1e-10
 """Convergence: infinity norm of the scaled residual below this. [m or rad]"""

@@ -69,10 +69,10 @@ def rest_position(free_length: Any) -> Any:
     return np.array([free_length, 0.0, 0.0])
 
 
-def ring_spacing(ring_length: Any, gap: Any) -> Any:
+def magnet_spacing(magnet_length: Any, gap: Any) -> Any:
     """Centre-to-centre distance of the two rings along the tip tangent: ring length plus the
     face-to-face gap. [m]"""
-    return ring_length + gap
+    return magnet_length + gap
 
 
 def ring_centres(tip_position: Any, tangent: Any, spacing: Any) -> tuple[Any, Any]:
@@ -83,25 +83,28 @@ def ring_centres(tip_position: Any, tangent: Any, spacing: Any) -> tuple[Any, An
 
 def ring_clearance(
     centres: Any,
-    ring_outer_diameter: Any,
-    ring_length: Any,
-    magnet_centre: Any,
-    magnet_axis: Any,
-    magnet_diameter: Any,
+    magnet_outer_diameter: Any,
     magnet_length: Any,
+    external_center: Any,
+    external_magnetization: Any,
+    external_diameter: Any,
+    external_length: Any,
 ) -> Any:
     """Clearance of the rings to the external magnet: the least distance of a ring centre to
     the cylinder (:func:`cylinder_distance`) less the radius of the sphere that holds a ring
     (:func:`ring_radius`); negative where they may touch. [m]
 
     centres : the ring centres (e.g. :func:`ring_centres`), each shape (3,). [m]
-    magnet_centre : the magnet's centre, base frame, shape (3,). [m]
-    magnet_axis : unit vector of its axis, shape (3,). [-]
+    magnet_outer_diameter, magnet_length : the rings' size. [m]
+    external_center : the external magnet's centre, base frame, shape (3,). [m]
+    external_magnetization : unit vector of its axis, shape (3,). [-]
+    external_diameter, external_length : its size. [m]
     """
-    half, radius = magnet_length / 2, magnet_diameter / 2
-    reach = ring_radius(ring_outer_diameter, ring_length)
+    half, radius = external_length / 2, external_diameter / 2
+    reach = ring_radius(magnet_outer_diameter, magnet_length)
     distances = [
-        cylinder_distance(centre - magnet_centre, magnet_axis, radius, half) for centre in centres
+        cylinder_distance(centre - external_center, external_magnetization, radius, half)
+        for centre in centres
     ]
     if is_symbolic(*distances):
         nearest = distances[0]
@@ -193,11 +196,11 @@ def disc_radius(loop: Any) -> Any:
 
 
 def ring_clears_wire(
-    ring_inner_diameter: float, wire_outer_diameter: float, clearance: float = WIRE_CLEARANCE
+    magnet_inner_diameter: float, wire_outer_diameter: float, clearance: float = WIRE_CLEARANCE
 ) -> bool:
     """Whether the ring's bore clears the wire by ``clearance`` (:data:`WIRE_CLEARANCE`),
     within :data:`FIT_TOLERANCE`. [m]"""
-    return ring_inner_diameter - wire_outer_diameter >= clearance - FIT_TOLERANCE
+    return magnet_inner_diameter - wire_outer_diameter >= clearance - FIT_TOLERANCE
 
 
 def ring_radius(outer_diameter: Any, length: Any) -> Any:

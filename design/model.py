@@ -37,10 +37,10 @@ import numpy as np
 from design import cantilever, rod
 from design.cylinder_field import cylinder_field
 from design.dipole import dipole_field, dipole_field_gradient
-from design.geometry import ring_centres, ring_clearance, ring_spacing
+from design.geometry import magnet_spacing, ring_centres, ring_clearance
 from design.magnets import cylinder_moment, ring_moment, ring_volume
-from design.parameters import NAMES, index, parameter_vector
-from design.params import Design
+from design.records import Design
+from design.registry import NAMES, index, parameter_vector
 from design.sections import polar_moment_of_area, second_moment_of_area, shear_modulus
 from design.wrench import tip_wrench
 
@@ -107,16 +107,16 @@ class Symbols(dict):
         self.rod_mass_per_length = (
             tubes["catheter"]["weight_per_length"] + tubes["wire"]["weight_per_length"]
         )
-        od, idia, h = s["ring_outer_diameter"], s["ring_inner_diameter"], s["ring_length"]
-        self.ring_moment = ring_moment(od, idia, h, s["ring_remanence"])
-        self.ring_mass = s["ring_density"] * ring_volume(od, idia, h)
-        self.ring_spacing = ring_spacing(h, s["ring_gap"])
-        axis = ca.vertcat(s["external_axis_x"], s["external_axis_y"], s["external_axis_z"])
-        self.external_axis = axis / ca.norm_2(axis)
+        od, idia, h = s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
+        self.ring_moment = ring_moment(od, idia, h, s["magnet_remanence"])
+        self.ring_mass = s["magnet_density"] * ring_volume(od, idia, h)
+        self.magnet_spacing = magnet_spacing(h, s["magnet_gap"])
+        axis = ca.vertcat(*(s[f"external_magnetization_{a}"] for a in "xyz"))
+        self.external_magnetization = axis / ca.norm_2(axis)
         self.external_center = ca.vertcat(
             s["external_center_x"], s["external_center_y"], s["external_center_z"]
         )
-        self.external_moment = self.external_axis * cylinder_moment(
+        self.external_moment = self.external_magnetization * cylinder_moment(
             s["external_diameter"], s["external_length"], s["external_remanence"]
         )
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
@@ -148,7 +148,7 @@ def sylvester_minors(stiffness: ca.SX) -> ca.SX:
 def ring_positions(s: Symbols, position: ca.SX, frame: ca.SX) -> tuple[ca.SX, ca.SX]:
     """(proximal, distal) ring centres of the robot whose rod tip is at ``position`` (3,)
     with ``frame`` (3, 3), base frame (:func:`design.geometry.ring_centres`). [m]"""
-    return ring_centres(position, frame[:, 0], s.ring_spacing)
+    return ring_centres(position, frame[:, 0], s.magnet_spacing)
 
 
 def magnet_clearance(s: Symbols, position: ca.SX, frame: ca.SX) -> ca.SX:
@@ -156,10 +156,10 @@ def magnet_clearance(s: Symbols, position: ca.SX, frame: ca.SX) -> ca.SX:
     (:func:`design.geometry.ring_clearance`); negative where they touch. [m]"""
     return ring_clearance(
         ring_positions(s, position, frame),
-        s["ring_outer_diameter"],
-        s["ring_length"],
+        s["magnet_outer_diameter"],
+        s["magnet_length"],
         s.external_center,
-        s.external_axis,
+        s.external_magnetization,
         s["external_diameter"],
         s["external_length"],
     )
@@ -262,13 +262,13 @@ class RingPairModel:
             """Loads at a tip pose: force (3) [N] and moment about the tip (3) [N m], base
             frame, then with torsion the axial torque on each ring (2) [N m]."""
             force, torque = tip_wrench(
-                field_model, position, frame, tip_angles, moment, s.ring_spacing
+                field_model, position, frame, tip_angles, moment, s.magnet_spacing
             )
             if "gravity" in effects:
                 g = load * s.gravity
                 ring_weight = s.ring_mass * g
                 force = force + 2 * ring_weight + s["tip_mass"] * g
-                torque = torque + s.ring_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
+                torque = torque + s.magnet_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
             out = [force, torque]
             if torsion:
                 out.append(
@@ -543,7 +543,7 @@ class RingPairModel:
             if near:
                 return cylinder_field(
                     offset,
-                    s.external_axis,
+                    s.external_magnetization,
                     s["external_diameter"] / 2,
                     s["external_length"],
                     s["external_remanence"],
@@ -578,11 +578,11 @@ class RingPairModel:
             m_i = ring_moment_vector(angles[i], frame, moment)
             out.append(ca.dot(tangent, magnet_torque(field_model(p)[0], m_i)))
         k12 = load**2 * coupling_coefficient(
-            s["ring_outer_diameter"],
-            s["ring_inner_diameter"],
-            s["ring_length"],
-            s.ring_spacing,
-            s["ring_remanence"],
+            s["magnet_outer_diameter"],
+            s["magnet_inner_diameter"],
+            s["magnet_length"],
+            s.magnet_spacing,
+            s["magnet_remanence"],
         )
         t1, t2 = coupling_torques(angles[0], angles[1], k12)
         return ca.vertcat(out[0] + t1, out[1] + t2)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from design.params import Robot, Tube
+from design.records import Robot, Tube
 
 
 def second_moment_of_area(outer_diameter: Any, inner_diameter: Any) -> Any:

@@ -30,7 +30,7 @@ import numpy as np
 from design.equilibrium import Equilibria, solve_equilibria
 from design.geometry import disc_radius, rest_position, winding_number
 from design.model import RingPairModel
-from design.params import Design
+from design.records import Design
 
 LOOP_SAMPLES = 720
 

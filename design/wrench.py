@@ -54,7 +54,7 @@ def tip_wrench(
     tip_frame: ca.SX,
     angles: ca.SX,
     ring_moment: ca.SX,
-    ring_spacing: ca.SX,
+    magnet_spacing: ca.SX,
 ) -> tuple[ca.SX, ca.SX]:
     """Total force and torque (about the rod tip) of the field on the ring pair.
 
@@ -62,16 +62,16 @@ def tip_wrench(
     tip_frame : shape (3, 3), columns (tangent, y_tip, z_tip). [-]
     angles : (theta1 distal, theta2 proximal) tip angles. [rad]
     ring_moment : moment magnitude of each ring. [A m^2]
-    ring_spacing : centre spacing delta. [m]
+    magnet_spacing : centre spacing delta. [m]
     Returns (force (3,) [N], torque (3,) [N m]), base frame.
     """
     tangent = tip_frame[:, 0]
-    proximal, distal = ring_centres(tip_position, tangent, ring_spacing)
+    proximal, distal = ring_centres(tip_position, tangent, magnet_spacing)
     m1 = ring_moment_vector(angles[0], tip_frame, ring_moment)
     m2 = ring_moment_vector(angles[1], tip_frame, ring_moment)
     b1, g1 = field_model(distal)
     b2, g2 = field_model(proximal)
     f1 = magnet_force(g1, m1)
     f2 = magnet_force(g2, m2)
-    torque = magnet_torque(b1, m1) + magnet_torque(b2, m2) + ring_spacing * ca.cross(tangent, f1)
+    torque = magnet_torque(b1, m1) + magnet_torque(b2, m2) + magnet_spacing * ca.cross(tangent, f1)
     return f1 + f2, torque

@@ -8,6 +8,7 @@ Exit codes: 0 done; 2 bad input (one message naming the key or option, no traceb
 from __future__ import annotations
 
 import sys
+import warnings
 
 import click
 
@@ -44,8 +45,14 @@ for _command in (
     cli.add_command(_command)
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+    """A warning for the user is one line on stderr, not a source location."""
+    err_console.print(f"warning: {message}", markup=False, highlight=False)
+
+
 def main() -> None:
     """Console-script entry point."""
+    warnings.showwarning = _show_warning
     try:
         cli.main(standalone_mode=True)
     except KeyboardInterrupt:

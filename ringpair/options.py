@@ -20,7 +20,7 @@ from rich.markup import escape
 
 from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, parse_effects
-from design.params import Design
+from design.records import Design
 from ringpair.angles import parse_angles
 
 if TYPE_CHECKING:

@@ -38,18 +38,18 @@ from design.atomic import atomic_path, write_text
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
 from design.model import DEFAULT_EFFECTS, RingPairModel
-from design.parameters import index
-from design.params import Design
+from design.records import Design
+from design.registry import index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import Study
 from ringpair.tables import effect_shifts
 
 TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
-    "ring_remanence": ("rel", 0.02),
-    "ring_outer_diameter": ("abs", 0.02 * MM),
-    "ring_inner_diameter": ("abs", 0.02 * MM),
-    "ring_length": ("abs", 0.02 * MM),
+    "magnet_remanence": ("rel", 0.02),
+    "magnet_outer_diameter": ("abs", 0.02 * MM),
+    "magnet_inner_diameter": ("abs", 0.02 * MM),
+    "magnet_length": ("abs", 0.02 * MM),
     "catheter_youngs_modulus": ("rel", 0.10),
     "wire_youngs_modulus": ("rel", 0.05),
     "external_remanence": ("rel", 0.02),

@@ -18,7 +18,7 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from design.atomic import atomic_path  # noqa: E402
 from design.branches import Branch  # noqa: E402
 from design.equilibrium import Equilibria  # noqa: E402
-from design.params import Design  # noqa: E402
+from design.records import Design  # noqa: E402
 from design.units import MM  # noqa: E402
 from design.workspace import Workspace  # noqa: E402
 from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E402

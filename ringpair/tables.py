@@ -15,8 +15,8 @@ from design.atomic import write_text
 from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
 from design.model import RingPairModel, available_effects
-from design.params import Design
-from design.units import MM, MM3, MPA
+from design.records import Design
+from design.units import MM, MM3
 
 if TYPE_CHECKING:
     from optimize.sizing.pareto import ParetoPoint
@@ -162,12 +162,11 @@ def pareto_rows(points: tuple[ParetoPoint, ...], study: Study) -> list[dict[str,
 
 
 def _file_units(values: dict[str, float]) -> dict[str, float]:
-    """Design values in file units: moduli in MPa, lengths in mm."""
-    return {
-        (f"{k}_mpa" if k.endswith("modulus") else f"{k}_mm"): v
-        / (MPA if k.endswith("modulus") else MM)
-        for k, v in values.items()
-    }
+    """Free design values (by name, SI) under their study-file keys, in file units."""
+    from optimize.sizing.studyfile import FREE_KEYS
+
+    spec = {k.name: k for k in FREE_KEYS.values()}
+    return {spec[k].key: v / spec[k].scale for k, v in values.items()}
 
 
 def write_rows(path: str | os.PathLike[str], rows: list[dict[str, object]]) -> None:

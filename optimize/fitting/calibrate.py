@@ -36,8 +36,8 @@ from scipy.optimize import least_squares
 
 from design.geometry import rest_position
 from design.model import RingPairModel, model_for
-from design.parameters import index
-from design.params import Design
+from design.records import Design
+from design.registry import index
 from design.units import DEG, GRAM, MM, MPA
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.paper_grid import (
@@ -126,7 +126,7 @@ FREE_PARAMETERS: dict[str, FreeParameter] = {
         _log("wire_torsion_scale", 1e-3, 1e3, 1.0),
         _log("catheter_torsion_scale", 1e-3, 1e3, 1.0),
         _log("external_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
-        _log("ring_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
+        _log("magnet_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
         _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
         _log("wire_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
         *(
@@ -136,7 +136,9 @@ FREE_PARAMETERS: dict[str, FreeParameter] = {
             for a in "xyz"
         ),
         *(
-            FreeParameter(f"external_axis_{a}", "linear", -2.0, 2.0, 5.0, 0.01, 0.5, ("", 1.0))
+            FreeParameter(
+                f"external_magnetization_{a}", "linear", -2.0, 2.0, 5.0, 0.01, 0.5, ("", 1.0)
+            )
             for a in "xyz"
         ),
         FreeParameter("free_length", "linear", 1e-3, 10.0, 5.0, MM, 0.05, ("mm", 1 / MM)),
@@ -405,7 +407,7 @@ def calibrate(
     free : names from :data:`FREE_PARAMETERS`; default :func:`default_free` (effects).
     rows : the rows to fit (indices or mask); default all. The others are still simulated
         (along the path when ordered) and get residuals, for cross-validation.
-    fixed : values of other model parameters (names of ``design.parameters.NAMES``) that
+    fixed : values of other model parameters (names of ``design.registry.NAMES``) that
         differ from the design, e.g. an earlier fit's. [SI]
     initial : starting values of free parameters; default the nominal design's. [SI]
     priors : add a Gaussian penalty row per free parameter, centred on the nominal design,

@@ -43,8 +43,8 @@ from scipy import stats
 
 from design.geometry import rest_position
 from design.model import EFFECTS, RingPairModel, model_for
-from design.parameters import index
-from design.params import Design
+from design.records import Design
+from design.registry import index
 from design.sections import tube_torsional_rigidity
 from optimize.fitting.calibrate import (
     EFFECT_FREE,

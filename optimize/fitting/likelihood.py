@@ -28,7 +28,7 @@ from typing import Literal
 
 import numpy as np
 
-from design.params import Design
+from design.records import Design
 from optimize.fitting.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
 from optimize.fitting.measurements import Measurements
 

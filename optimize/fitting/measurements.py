@@ -22,7 +22,7 @@ import numpy as np
 
 from design.atomic import write_text
 from design.designfile import dumps_design, load_design
-from design.params import Design
+from design.records import Design
 from design.suggest import did_you_mean
 from design.units import DEG, MM
 

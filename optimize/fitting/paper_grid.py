@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from design.model import model_for
-from design.parameters import index
-from design.params import Design
+from design.records import Design
+from design.registry import index
 from design.units import MM
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.sensitivity import position_errors, predict

@@ -24,7 +24,7 @@ from design.compiled import compile_function, evaluate_columns
 from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.friction import play, play_step
 from design.model import RingPairModel
-from design.parameters import NAMES, index
+from design.registry import NAMES, index
 from optimize.fitting.measurements import Measurements
 
 THREADS = 2
@@ -44,15 +44,15 @@ SENSITIVE = (
     "wire_torsion_scale",
     "catheter_torsion_scale",
     "external_remanence",
-    "ring_remanence",
+    "magnet_remanence",
     "catheter_youngs_modulus",
     "wire_youngs_modulus",
     "external_center_x",
     "external_center_y",
     "external_center_z",
-    "external_axis_x",
-    "external_axis_y",
-    "external_axis_z",
+    "external_magnetization_x",
+    "external_magnetization_y",
+    "external_magnetization_z",
     "free_length",
     "wire_friction_angle",
     "catheter_friction_angle",

@@ -19,8 +19,8 @@ import numpy as np
 
 from design.equilibrium import Equilibria, solve_sequence
 from design.model import RingPairModel, model_for
-from design.parameters import NAMES, index
-from design.params import Design
+from design.records import Design
+from design.registry import NAMES, index
 from design.suggest import did_you_mean
 from optimize.fitting.measurements import Measurements, make_measurements
 
@@ -101,7 +101,7 @@ def setup_variant(design: Design, face_gap: float, stiffness: float) -> Design:
 
 def true_parameters(design: Design, params_override: Mapping[str, float] | None) -> np.ndarray:
     """Parameter vector of ``design`` with ``params_override`` (names of
-    :data:`design.parameters.NAMES`, SI values) applied; ValueError names a bad name."""
+    :data:`design.registry.NAMES`, SI values) applied; ValueError names a bad name."""
     params = RingPairModel.parameters(design)
     for name, value in (params_override or {}).items():
         if name not in NAMES:
@@ -136,7 +136,7 @@ def synthesize_data(
     noise_mm : one-sigma Gaussian noise on each measured coordinate. [mm]
     seed : seed of ``numpy.random.default_rng``; the same seed gives the same data.
     params_override : true values of model parameters (names of
-        :data:`design.parameters.NAMES`) that differ from the design. [SI]
+        :data:`design.registry.NAMES`) that differ from the design. [SI]
     tip_angles : also record the ring angles at the tip, with ``angle_noise_deg`` noise. [deg]
     record_sigma : write ``noise_mm`` as each row's sigma (default: the data do not say).
     """

@@ -23,11 +23,11 @@ import numpy as np
 from design.equilibrium import solve_equilibria
 from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
-from design.parameters import NAMES, parameter_vector
-from design.params import Design
+from design.records import Design
+from design.registry import NAMES, parameter_vector
 from optimize.sizing.materials import Material, material
 from optimize.sizing.nlp_designs import (
-    design_with,
+    candidate_design,
     free_values,
     group_bounds,
     material_combinations,
@@ -158,7 +158,7 @@ def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray
 @lru_cache(maxsize=32)
 def _norms(study: Study) -> _Norms:
     cat, wire = material_combinations(study)[0]
-    design = design_with(study, free_values(study, study.base), cat, wire)
+    design = candidate_design(study, free_values(study, study.base), cat, wire)
     c, v, x, _ = _forward(study, design)
     x = np.nan_to_num(x)
     _, m, _, _, _ = c.evaluate(v, x, parameter_vector(design), 1.0)
@@ -220,7 +220,7 @@ def _start_points(study: Study, count: int) -> list[np.ndarray]:
         for _ in range(100):
             z = lo + (hi - lo) * rng.random(len(lo))
             vals = dict(zip(names, z, strict=True))
-            d = design_with(study, vals)
+            d = candidate_design(study, vals)
             ok = (
                 d.tip.magnet_inner_diameter < d.tip.magnet_outer_diameter
                 and d.robot.catheter.inner_diameter < d.robot.catheter.outer_diameter
@@ -255,7 +255,7 @@ def _parameters(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(NLP parameter vector, warm-start z, warm-start x~ (n, K'), area sign)."""
     c = core(_nlp_shape(study))
-    design = design_with(study, start, cat, wire)
+    design = candidate_design(study, start, cat, wire)
     p = parameter_vector(design)
     _, _, x, _ = _forward(study, design)
     x = np.nan_to_num(x)
@@ -299,7 +299,7 @@ def _reachable_start(
     sampled equilibria all converge and are stable by forward simulation (a warm start
     on the branch the NLP should follow)."""
     for _ in range(halvings):
-        eq = _forward(study, design_with(study, start, cat, wire))[3]
+        eq = _forward(study, candidate_design(study, start, cat, wire))[3]
         if eq.stable.all():
             return start
         start = anchor + 0.5 * (start - anchor)
@@ -558,7 +558,7 @@ def optimize_design(
             active.append(f"bound.{b.name}.low")
         elif width > 0 and (b.high - value) / width < 1e-6:
             active.append(f"bound.{b.name}.high")
-    design = design_with(study, best.v, cat, wire, name=f"{study.name}-optimum")
+    design = candidate_design(study, best.v, cat, wire, name=f"{study.name}-optimum")
     design = replace(design, description=f"optimum of study {study.name!r} (ringpair optimize)")
     return OptimizationResult(
         study=study.name,
@@ -589,15 +589,16 @@ def pareto_values(study: Study, sweep: ParetoSweep) -> np.ndarray:
         if sweep.against == "magnet_volume":
             tip = study.base.tip
             fixed = {
-                "ring_outer_diameter": tip.magnet_outer_diameter,
-                "ring_inner_diameter": tip.magnet_inner_diameter,
-                "ring_length": tip.magnet_length,
+                "magnet_outer_diameter": tip.magnet_outer_diameter,
+                "magnet_inner_diameter": tip.magnet_inner_diameter,
+                "magnet_length": tip.magnet_length,
             }
             rng = {}
             for name, value in fixed.items():
                 b = study.bound(name)
                 rng[name] = (b.low, b.high) if b else (value, value)
-            od, idia, h = rng["ring_outer_diameter"], rng["ring_inner_diameter"], rng["ring_length"]
+            od, idia = rng["magnet_outer_diameter"], rng["magnet_inner_diameter"]
+            h = rng["magnet_length"]
             bore = min(idia[1], od[0] - 2 * study.limits.min_wall)
             lo_ = 2 * ring_volume(od[0], max(bore, 0.0), h[0])
             hi_ = 2 * ring_volume(od[1], idia[0], h[1])

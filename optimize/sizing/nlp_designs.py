@@ -8,13 +8,12 @@ import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
 from design.geometry import external_distance, magnet_centre_at
-from design.parameters import index, parameter_vector
-from design.params import Design
+from design.records import Design
+from design.registry import design_with, index, parameter_vector
 from optimize.sizing.materials import Material, material
 from optimize.sizing.studyfile import PARETO_QUANTITIES, Study
 
@@ -32,7 +31,7 @@ def free_values(study: Study, design: Design) -> np.ndarray:
     return np.array(out)
 
 
-def design_with(
+def candidate_design(
     study: Study,
     values: Mapping[str, float] | np.ndarray,
     catheter: Material | None = None,
@@ -44,43 +43,27 @@ def design_with(
     if not isinstance(values, Mapping):
         values = {b.name: float(x) for b, x in zip(study.free, values, strict=True)}
     base = study.base
-
-    def tube(t: Any, prefix: str, m: Material | None) -> Any:
+    robot = base.robot
+    for prefix, m in (("catheter", catheter), ("wire", wire)):
         if m is not None:
-            t = replace(
-                t, youngs_modulus=m.youngs_modulus, poisson_ratio=m.poisson_ratio, density=m.density
+            tube = replace(
+                getattr(robot, prefix),
+                youngs_modulus=m.youngs_modulus,
+                poisson_ratio=m.poisson_ratio,
+                density=m.density,
             )
-        keys = {
-            "outer_diameter": f"{prefix}_outer_diameter",
-            "inner_diameter": f"{prefix}_inner_diameter",
-            "youngs_modulus": f"{prefix}_youngs_modulus",
-        }
-        return replace(t, **{f: float(values[k]) for f, k in keys.items() if k in values})
-
-    robot = replace(
-        base.robot,
-        catheter=tube(base.robot.catheter, "catheter", catheter),
-        wire=tube(base.robot.wire, "wire", wire),
+            robot = replace(robot, **{prefix: tube})
+    design = replace(base, name=name or base.name, robot=robot)
+    design = design_with(
+        design, {k: v for k, v in values.items() if k != "external_distance"}
     )
-    tip_keys = {
-        "magnet_outer_diameter": "ring_outer_diameter",
-        "magnet_inner_diameter": "ring_inner_diameter",
-        "magnet_length": "ring_length",
-        "gap": "ring_gap",
-    }
-    tip = replace(base.tip, **{f: float(values[k]) for f, k in tip_keys.items() if k in values})
-    ext = base.external_magnet
     if "external_distance" in values:
+        ext = design.external_magnet
         distance = float(values["external_distance"])
-        centre = magnet_centre_at(base.robot.free_length, ext.center, distance)
+        centre = magnet_centre_at(design.robot.free_length, ext.center, distance)
         ext = replace(ext, center=(float(centre[0]), float(centre[1]), float(centre[2])))
-    return replace(
-        base,
-        name=name or base.name,
-        robot=robot,
-        tip=tip,
-        external_magnet=ext,
-    )
+        design = replace(design, external_magnet=ext)
+    return design
 
 
 def material_combinations(study: Study) -> list[tuple[Material | None, Material | None]]:

@@ -58,7 +58,7 @@ from design.geometry import (
 )
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
-from design.parameters import NAMES, index
+from design.registry import NAMES, index
 from optimize.sizing.studyfile import DEG, MM, MM3
 
 SMOOTH_MAX_SHARPNESS = 200.0
@@ -214,14 +214,16 @@ def core(shape: NlpShape) -> Core:
             rows.append(("neutral", ca.sqrt(ca.sumsqr(deflection[-1]) + TINY**2)))
     wire = s["wire_outer_diameter"]
     rows += [
-        ("ring_on_wire", s["ring_inner_diameter"] - wire),
+        ("ring_on_wire", s["magnet_inner_diameter"] - wire),
         ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
-        ("ring_wall", (s["ring_outer_diameter"] - s["ring_inner_diameter"]) / 2),
+        ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
         ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
-        ("ring_diameter", s["ring_outer_diameter"]),
+        ("ring_diameter", s["magnet_outer_diameter"]),
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
-    volume = 2 * ring_volume(s["ring_outer_diameter"], s["ring_inner_diameter"], s["ring_length"])
+    volume = 2 * ring_volume(
+        s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
+    )
     distance = external_distance(length, s.external_center)
     rows += [
         ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),

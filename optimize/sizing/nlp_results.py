@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from design.params import Design
+from design.records import Design
 
 
 @dataclass(frozen=True)

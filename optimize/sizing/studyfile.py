@@ -24,10 +24,10 @@ objective = "disc_radius"                 # or "area", "reach_ratio", or a weigh
 #                                         # for the base design, then weighted and summed)
 
 [free]                                    # [low, high] in file units; others stay fixed
-ring_outer_diameter_mm = [2.0, 4.0]       # ring magnets (both rings equal)
-ring_inner_diameter_mm = [0.5, 2.0]
-ring_length_mm = [0.5, 3.0]
-ring_gap_mm = [0.0, 1.0]                  # face-to-face gap of the rings
+magnet_outer_diameter_mm = [2.0, 4.0]       # ring magnets (both rings equal)
+magnet_inner_diameter_mm = [0.5, 2.0]
+magnet_length_mm = [0.5, 3.0]
+magnet_gap_mm = [0.0, 1.0]                  # face-to-face gap of the rings
 catheter_outer_diameter_mm = [1.0, 4.0]
 catheter_inner_diameter_mm = [0.5, 3.0]
 catheter_youngs_modulus_mpa = [300, 3000] # only with at most one catheter material
@@ -94,9 +94,10 @@ from typing import Any
 from design.designfile import DesignError, default_design, load_design
 from design.geometry import WIRE_CLEARANCE
 from design.model import EFFECTS
-from design.params import Design
+from design.records import Design
+from design.registry import current, file_key, file_unit
 from design.suggest import did_you_mean
-from design.units import DEG, MM, MM3, MPA
+from design.units import DEG, MM, MM3
 from optimize.sizing.materials import MATERIALS
 
 
@@ -106,7 +107,7 @@ class StudyError(ValueError):
 
 @dataclass(frozen=True)
 class FreeKey:
-    """One free quantity: file key, SI name, unit scale, lowest admissible low bound."""
+    """One free quantity: file key, name, unit scale, lowest admissible low bound."""
 
     key: str
     name: str
@@ -117,35 +118,24 @@ class FreeKey:
     high: float
 
 
+def _free_key(name: str, meaning: str, low_open: bool, high: float) -> FreeKey:
+    """A free model parameter, its key and unit from :mod:`design.registry`; ``high`` in
+    file units."""
+    return FreeKey(file_key(name), name, meaning, file_unit(name)[1], 0, low_open, high)
+
+
 FREE_KEYS: dict[str, FreeKey] = {
     k.key: k
     for k in (
-        FreeKey("ring_outer_diameter_mm", "ring_outer_diameter", "ring OD", MM, 0, True, 100),
-        FreeKey("ring_inner_diameter_mm", "ring_inner_diameter", "ring ID", MM, 0, False, 100),
-        FreeKey("ring_length_mm", "ring_length", "ring length", MM, 0, True, 100),
-        FreeKey("ring_gap_mm", "ring_gap", "ring gap", MM, 0, False, 100),
-        FreeKey(
-            "catheter_outer_diameter_mm", "catheter_outer_diameter", "catheter OD", MM, 0, True, 50
-        ),
-        FreeKey(
-            "catheter_inner_diameter_mm",
-            "catheter_inner_diameter",
-            "catheter ID",
-            MM,
-            0,
-            False,
-            50,
-        ),
-        FreeKey(
-            "catheter_youngs_modulus_mpa",
-            "catheter_youngs_modulus",
-            "catheter modulus",
-            MPA,
-            0,
-            True,
-            1e6,
-        ),
-        FreeKey("wire_outer_diameter_mm", "wire_outer_diameter", "wire OD", MM, 0, True, 50),
+        _free_key("magnet_outer_diameter", "ring OD", True, 100),
+        _free_key("magnet_inner_diameter", "ring ID", False, 100),
+        _free_key("magnet_length", "ring length", True, 100),
+        _free_key("magnet_gap", "ring gap", False, 100),
+        _free_key("catheter_outer_diameter", "catheter OD", True, 50),
+        _free_key("catheter_inner_diameter", "catheter ID", False, 50),
+        _free_key("catheter_youngs_modulus", "catheter modulus", True, 1e6),
+        _free_key("wire_outer_diameter", "wire OD", True, 50),
+        # not a model parameter: the magnet placed on the axis (design.geometry)
         FreeKey("external_distance_mm", "external_distance", "magnet distance", MM, 0, True, 10000),
     )
 }
@@ -328,6 +318,8 @@ def _pair(path: str, value: Any, what: str) -> tuple[float, float]:
 
 
 def _free(node: Any) -> tuple[Bound, ...]:
+    if isinstance(node, dict):
+        node = {current(k): v for k, v in node.items()}
     node = _check_keys("free", node, FREE_KEYS)
     if not node:
         raise StudyError(

@@ -11,6 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from design.atomic import write_text
+from design.registry import current
 from design.suggest import did_you_mean
 from ringpair.options import (
     CSV_DESIGN,
@@ -69,7 +70,8 @@ def calibrate(
 
     d, m = measured_data(data, design_path)
     model = model_from(effects)
-    names = None if free is None else tuple(n.strip() for n in free.split(",") if n.strip())
+    typed = () if free is None else [n.strip() for n in free.split(",") if n.strip()]
+    names = None if free is None else tuple(current(n) for n in typed)
     for n in names or ():
         if n not in FREE_PARAMETERS:
             raise UserError(

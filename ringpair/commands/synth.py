@@ -9,9 +9,9 @@ import numpy as np
 from rich.table import Table
 
 from design.geometry import rest_position
-from design.parameters import PARAMETERS
+from design.registry import PARAMETERS, current, file_unit
 from design.suggest import did_you_mean
-from design.units import DEG, GRAM, MM, MPA
+from design.units import MM
 from ringpair.options import (
     DESIGN,
     UserError,
@@ -24,29 +24,20 @@ from ringpair.options import (
     path_option,
 )
 
-SET_UNITS = {"m": ("mm", MM), "rad": ("deg", DEG), "Pa": ("MPa", MPA), "kg": ("g", GRAM)}
-"""Units of --set values: the model's SI unit -> (the unit typed, its size in SI)."""
-
-
-def _set_unit(name: str) -> tuple[str, float]:
-    """The unit a --set value of parameter ``name`` is typed in, and its size in SI."""
-    unit = PARAMETERS[name].unit
-    return SET_UNITS.get(unit, (unit, 1.0))
-
 
 def _overrides(items: tuple[str, ...]) -> dict[str, float]:
     """--set NAME=VALUE pairs in file units (mm, deg, MPa, g) as SI model parameters."""
     out: dict[str, float] = {}
     for item in items:
         name, sep, text = item.partition("=")
-        name = name.strip()
+        name = current(name.strip())
         if not sep:
             raise UserError(f"--set expects NAME=VALUE (e.g. wire_torsion_scale=2); got {item!r}")
         if name not in PARAMETERS:
             raise UserError(
                 f"--set: unknown model parameter {name!r}{did_you_mean(name, PARAMETERS)}"
             )
-        unit, size = _set_unit(name)
+        unit, size = file_unit(name)
         try:
             value = float(text)
         except ValueError:
@@ -163,7 +154,7 @@ def synth(
     table.add_row("noise (one sigma, each coordinate)", f"{noise_mm:g} mm, seed {seed}")
     table.add_row("deflection seen", f"{deflection.min():.2f} .. {deflection.max():.2f} mm")
     for k, v in truth.items():
-        unit, size = _set_unit(k)
+        unit, size = file_unit(k)
         table.add_row(f"true {k}", f"{v / size:g} {unit if unit != '-' else ''}".rstrip())
     console.print(table)
     if data.dropped:

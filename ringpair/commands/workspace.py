@@ -11,7 +11,7 @@ from rich.table import Table
 
 from design.atomic import write_text
 from design.equilibrium import solve_design
-from design.params import Design
+from design.records import Design
 from design.units import MM
 from design.workspace import Workspace, sweep_workspace
 from ringpair.options import (

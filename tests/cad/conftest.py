@@ -11,7 +11,7 @@ import pytest
 from cad.assembly import RobotAssembly
 from cad.build import CadReport, build_parts
 from design.designfile import default_design
-from design.params import Design
+from design.records import Design
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from cad.build import CadReport, build_parts
-from design.params import Design
+from design.records import Design
 
 
 @pytest.mark.slow

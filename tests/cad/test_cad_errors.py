@@ -12,7 +12,7 @@ from cad.layout import ActuatorSpec
 from cad.mounting import MountingSpec, build_mounting_pieces
 from cad.process import FDM, get_process
 from cad.tracking import GrooveSpec
-from design.params import Design
+from design.records import Design
 
 
 def test_cad_error_is_a_value_error() -> None:

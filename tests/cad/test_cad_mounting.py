@@ -19,7 +19,7 @@ from cad.assembly import tip_locations
 from cad.mounting import MountingDims, MountingSpec, build_mounting_pieces
 from cad.process import FDM, RESIN
 from cad.tracking import GrooveSpec
-from design.params import Design
+from design.records import Design
 
 
 def _disc(diameter: float, length: float) -> float:

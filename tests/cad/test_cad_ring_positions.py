@@ -15,8 +15,8 @@ from cad.errors import CadError
 from cad.mounting import MountingSpec, mounting_dims
 from cad.process import FDM
 from design.model import Symbols, model_for, ring_positions
-from design.parameters import parameter_vector
-from design.params import Design
+from design.records import Design
+from design.registry import parameter_vector
 from design.units import MM
 
 

@@ -10,7 +10,7 @@ from design.branches import branches, load_path, scaled_loads
 from design.designfile import default_design
 from design.equilibrium import solve_equilibria, stable_states
 from design.model import model_for
-from design.parameters import index
+from design.registry import index
 from design.ring_coupling import coupling_coefficient
 from design.sections import tube_torsional_rigidity
 

@@ -11,8 +11,8 @@ from scipy.optimize import brentq
 from design.designfile import default_design
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, available_effects, parse_effects
-from design.parameters import index
-from design.params import Environment
+from design.records import Environment
+from design.registry import index
 from design.sections import bending_rigidity, tube_torsional_rigidity
 
 DEMO = default_design()
@@ -45,7 +45,9 @@ def test_self_weight_deflection_is_w_L4_over_8EI():
     # Gere & Goodno, App. G case 1: uniform load w on a cantilever, tip deflection
     # w L^4 / (8 EI), tip slope w L^3 / (6 EI). Magnets and tip mass weightless and unmagnetised.
     model = RingPairModel(frozenset({"gravity"}))
-    params = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0, ring_density=0.0)
+    params = set_params(
+        model.parameters(with_gravity(DEMO)), magnet_remanence=0.0, magnet_density=0.0
+    )
     eq = solve_equilibria(model, params, 0.0, 0.0)
     c, w = DEMO.robot.catheter, DEMO.robot.wire
     weight = 9.81 * (
@@ -60,7 +62,9 @@ def test_self_weight_deflection_is_w_L4_over_8EI():
 def test_tip_mass_adds_F_L3_over_3EI():
     # Gere & Goodno, App. G case 4: tip force P deflects by P L^3 / (3 EI).
     model = RingPairModel(frozenset({"gravity"}))
-    base = set_params(model.parameters(with_gravity(DEMO)), ring_remanence=0.0, ring_density=0.0)
+    base = set_params(
+        model.parameters(with_gravity(DEMO)), magnet_remanence=0.0, magnet_density=0.0
+    )
     heavy = set_params(base, tip_mass=2e-3)
     z0 = solve_equilibria(model, base, 0.0, 0.0).position[0, 2]
     z1 = solve_equilibria(model, heavy, 0.0, 0.0).position[0, 2]
@@ -124,14 +128,14 @@ def test_twist_of_each_transmission_in_a_uniform_transverse_field():
     size = (moment * MU0 * 4 / np.pi) ** (1 / 3)
     params = set_params(
         model.parameters(DEMO),
-        ring_gap=1.0,
+        magnet_gap=1.0,
         external_remanence=1.0,
         external_diameter=size,
         external_length=size,
         external_center_x=L,
         external_center_y=-far,
-        external_axis_x=0.0,
-        external_axis_y=1.0,
+        external_magnetization_x=0.0,
+        external_magnetization_y=1.0,
     )
     from design.magnets import ring_moment
 

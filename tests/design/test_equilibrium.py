@@ -13,7 +13,7 @@ from design.dipole import K_DIPOLE
 from design.equilibrium import solve_design, solve_equilibria, stable_states
 from design.magnets import ring_moment
 from design.model import RingPairModel
-from design.parameters import index
+from design.registry import index
 from design.sections import bending_rigidity
 
 MODEL = RingPairModel()
@@ -38,7 +38,7 @@ def uniform_field_params(b: float, direction: str) -> np.ndarray:
     # remanence B_r = moment mu0 / volume.
     size = FAR / 10
     values = {
-        "ring_gap": -DEMO.tip.magnet_length,  # centre spacing 0
+        "magnet_gap": -DEMO.tip.magnet_length,  # centre spacing 0
         "external_remanence": moment * MU0 / (np.pi / 4 * size**3),
         "external_diameter": size,
         "external_length": size,
@@ -47,15 +47,15 @@ def uniform_field_params(b: float, direction: str) -> np.ndarray:
         values |= {
             "external_center_x": L + FAR,
             "external_center_y": 0.0,
-            "external_axis_x": 1.0,
-            "external_axis_y": 0.0,
+            "external_magnetization_x": 1.0,
+            "external_magnetization_y": 0.0,
         }
     else:  # on the y axis at +FAR, magnetised along -y: B along -y at the tip
         values |= {
             "external_center_x": L,
             "external_center_y": FAR,
-            "external_axis_x": 0.0,
-            "external_axis_y": -1.0,
+            "external_magnetization_x": 0.0,
+            "external_magnetization_y": -1.0,
         }
     for name, value in values.items():
         params[index(name)] = value

@@ -28,7 +28,7 @@ from setups import EFFECT_SETS, random_design
 from design.designfile import default_design, design_from_dict, design_to_dict
 from design.equilibrium import solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
-from design.params import Design
+from design.records import Design
 from design.sections import bending_rigidity
 
 AGREEMENT = 1e-5

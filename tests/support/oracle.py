@@ -32,7 +32,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
-from design.params import Design
+from design.records import Design
 from design.ring_coupling import coupling_coefficient
 
 MU0 = 4e-7 * np.pi * 1.00000000055  # CODATA 2018 vacuum permeability [T m / A]

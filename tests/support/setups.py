@@ -20,7 +20,7 @@ import numpy as np
 
 from design.designfile import DesignError, default_design, design_from_dict, design_to_dict
 from design.geometry import WIRE_CLEARANCE, cylinder_distance, rest_position
-from design.params import Design
+from design.records import Design
 from design.units import MM
 
 EFFECT_SETS = tuple(

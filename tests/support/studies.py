@@ -4,8 +4,8 @@ SMALL = """
 name = "small"
 objective = "disc_radius"
 [free]
-ring_length_mm = [0.3, 1.5]
-ring_gap_mm = [0.0, 1.0]
+magnet_length_mm = [0.3, 1.5]
+magnet_gap_mm = [0.0, 1.0]
 wire_outer_diameter_mm = [0.3, 0.6]
 external_distance_mm = [70.0, 200.0]
 [materials]

@@ -9,7 +9,7 @@ import pytest
 
 from design.equilibrium import solve_equilibria, solve_sequence
 from design.model import RingPairModel
-from design.parameters import index
+from design.registry import index
 from optimize.fitting.calibrate import (
     PAPER_FIELD_GRID,
     PAPER_STIFFNESS_GRID,
@@ -55,11 +55,11 @@ def _check_jacobian(model, params, solve, names, ordered=None, m=None):
 NAMES_BASELINE = (
     "bending_rigidity_scale",
     "external_remanence",
-    "ring_remanence",
+    "magnet_remanence",
     "external_center_x",
     "external_center_y",
     "external_center_z",
-    "external_axis_y",
+    "external_magnetization_y",
     "free_length",
     "wire_youngs_modulus",
 )
@@ -92,7 +92,7 @@ def test_implicit_function_jacobian_matches_finite_differences_torsion(demonstra
         "wire_torsion_scale",
         "catheter_torsion_scale",
         "bending_rigidity_scale",
-        "ring_remanence",
+        "magnet_remanence",
     )
     _check_jacobian(model, params, solve, names, m=m)
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from design.designfile import default_design
-from design.params import Design
+from design.records import Design
 from optimize.fitting.calibrate import EFFECT_FREE
 from optimize.fitting.diagnose import diagnose, report_key, residual_structure
 from optimize.fitting.likelihood import profile_sigma

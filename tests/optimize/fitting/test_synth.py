@@ -8,7 +8,7 @@ import pytest
 
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import RingPairModel
-from design.parameters import index
+from design.registry import index
 from optimize.fitting.synth import default_commands, synthesize, synthesize_data
 
 

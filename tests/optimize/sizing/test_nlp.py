@@ -326,7 +326,7 @@ def test_infeasible_study_reports_the_conflict():
     text = """
 name = "impossible"
 [free]
-ring_inner_diameter_mm = [0.5, 0.6]
+magnet_inner_diameter_mm = [0.5, 0.6]
 wire_outer_diameter_mm = [0.4, 0.6]
 [materials]
 catheter = ["ptfe"]
@@ -345,7 +345,7 @@ starts = 2
     assert names == ["ring_on_wire"]
     conflict = result.conflicts[0]
     assert conflict.violation == pytest.approx(0.3e-3, rel=1e-4)
-    assert "ring_inner_diameter at its upper bound" in result.limiting_bounds
+    assert "magnet_inner_diameter at its upper bound" in result.limiting_bounds
     assert "wire_outer_diameter at its lower bound" in result.limiting_bounds
     report = result.report()
     assert "INFEASIBLE" in report

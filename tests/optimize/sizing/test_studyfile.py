@@ -20,7 +20,7 @@ from optimize.sizing.studyfile import (
 MINIMAL = """
 name = "s"
 [free]
-ring_length_mm = [0.5, 2.0]
+magnet_length_mm = [0.5, 2.0]
 [materials]
 catheter = ["ptfe"]
 wire = ["niti"]
@@ -47,7 +47,7 @@ def test_default_study_is_the_demonstrator_set_up():
 
 def test_minimal_study_defaults_in_si():
     s = loads_study(MINIMAL)
-    assert s.free[0].name == "ring_length"
+    assert s.free[0].name == "magnet_length"
     assert (s.free[0].low, s.free[0].high) == pytest.approx((0.5e-3, 2e-3))
     lim = s.limits
     assert lim.max_outer_diameter == pytest.approx(4e-3)  # the demonstrator's rings
@@ -94,26 +94,26 @@ BAD = [
     ('name = "s"', 'name = ""', ["name must be a non-empty string"]),
     ('name = "s"', 'name = "s"\nobjektive = "area"', ["unknown key study.objektive", "objective"]),
     (
-        "ring_length_mm = [0.5, 2.0]",
-        "ring_lenght_mm = [0.5, 2.0]",
-        ["unknown key free.ring_lenght_mm", "did you mean 'ring_length_mm'"],
+        "magnet_length_mm = [0.5, 2.0]",
+        "magnet_lenght_mm = [0.5, 2.0]",
+        ["unknown key free.magnet_lenght_mm", "did you mean 'magnet_length_mm'"],
     ),
     (
-        "ring_length_mm = [0.5, 2.0]",
-        "ring_length_mm = [2.0, 0.5]",
-        ["free.ring_length_mm", "low <= high", "[2.0, 0.5]"],
+        "magnet_length_mm = [0.5, 2.0]",
+        "magnet_length_mm = [2.0, 0.5]",
+        ["free.magnet_length_mm", "low <= high", "[2.0, 0.5]"],
     ),
     (
-        "ring_length_mm = [0.5, 2.0]",
-        "ring_length_mm = [-1.0, 2.0]",
-        ["free.ring_length_mm", "physical range", "> 0", "[-1.0, 2.0]"],
+        "magnet_length_mm = [0.5, 2.0]",
+        "magnet_length_mm = [-1.0, 2.0]",
+        ["free.magnet_length_mm", "physical range", "> 0", "[-1.0, 2.0]"],
     ),
     (
-        "ring_length_mm = [0.5, 2.0]",
-        "ring_length_mm = 1.0",
-        ["free.ring_length_mm must be [low, high]", "got 1.0"],
+        "magnet_length_mm = [0.5, 2.0]",
+        "magnet_length_mm = 1.0",
+        ["free.magnet_length_mm must be [low, high]", "got 1.0"],
     ),
-    ("[free]\nring_length_mm = [0.5, 2.0]\n", "", ["missing section [free]"]),
+    ("[free]\nmagnet_length_mm = [0.5, 2.0]\n", "", ["missing section [free]"]),
     ('catheter = ["ptfe"]', 'catheter = ["tefon"]', ["materials.catheter", "got 'tefon'"]),
     ('catheter = ["ptfe"]', "", ["constraints.catheter_max_strain is required"]),
     ('name = "s"', 'name = "s"\nobjective = "volume"', ["objective must be one of", "'volume'"]),
@@ -148,7 +148,7 @@ BAD = [
         ["pareto[0].range_mm does not fit", "range_mm3"],
     ),
     (
-        "ring_length_mm = [0.5, 2.0]",
+        "magnet_length_mm = [0.5, 2.0]",
         "catheter_youngs_modulus_mpa = [300.0, 900.0]",
         [],  # one catheter material: fine (checked below with two)
     ),
@@ -171,7 +171,7 @@ def test_bad_study_gives_one_clear_message(old, new, words):
 
 def test_free_modulus_with_several_materials_is_refused():
     text = MINIMAL.replace(
-        "ring_length_mm = [0.5, 2.0]", "catheter_youngs_modulus_mpa = [300.0, 900.0]"
+        "magnet_length_mm = [0.5, 2.0]", "catheter_youngs_modulus_mpa = [300.0, 900.0]"
     ).replace('catheter = ["ptfe"]', 'catheter = ["ptfe", "nylon_12"]')
     with pytest.raises(StudyError, match="at most one catheter material"):
         loads_study(text)
@@ -183,3 +183,10 @@ def test_missing_and_malformed_files(tmp_path):
     (tmp_path / "bad.toml").write_text("name = [")
     with pytest.raises(StudyError, match="is not valid TOML"):
         load_study(tmp_path / "bad.toml")
+
+
+def test_old_ring_keys_still_load_with_a_warning_that_names_the_new_key():
+    old = MINIMAL.replace("magnet_length_mm", "ring_length_mm")
+    with pytest.warns(FutureWarning, match="'ring_length_mm' is now called 'magnet_length_mm'"):
+        study = loads_study(old)
+    assert study == loads_study(MINIMAL)

@@ -43,7 +43,8 @@ def test_optimize_writes_the_best_design_fronts_plots_and_summary(tmp_path, pare
 
 def test_bad_study_file_is_one_message_and_exit_2(tmp_path, pareto_study):
     path = tmp_path / "study.toml"
-    path.write_text(pareto_study.replace("ring_gap_mm = [0.0, 1.0]", "ring_gap_mm = [1.0, 0.0]"))
+    bad = pareto_study.replace("magnet_gap_mm = [0.0, 1.0]", "magnet_gap_mm = [1.0, 0.0]")
+    path.write_text(bad)
     result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(tmp_path / "o")])
-    assert result.exit_code == 2 and "ring_gap_mm" in result.output
+    assert result.exit_code == 2 and "magnet_gap_mm" in result.output
     assert "Traceback" not in result.output and not (tmp_path / "o").exists()

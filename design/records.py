@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from design.geometry import ring_spacing
+from design.geometry import magnet_spacing
 
 Vector3 = tuple[float, float, float]
 
@@ -68,7 +68,7 @@ class Tip:
     @property
     def spacing(self) -> float:
         """Centre-to-centre distance of the two rings along the tip tangent. [m]"""
-        return ring_spacing(self.magnet_length, self.gap)
+        return magnet_spacing(self.magnet_length, self.gap)
 
 
 @dataclass(frozen=True)
