@@ -27,8 +27,9 @@ from design.geometry import (
     ring_clears_wire,
 )
 from design.records import Design, Environment, ExternalMagnet, Robot, Tip, Tube
+from design.registry import PARAMETERS, file_unit
 from design.suggest import did_you_mean
-from design.units import DEG, GRAM, MM, MPA
+from design.units import MM
 
 
 class DesignError(ValueError):
@@ -65,46 +66,28 @@ class Key:
         return f"a number {rng}".rstrip()
 
 
-def _tube_keys() -> tuple[Key, ...]:
-    return (
-        Key("outer_diameter_mm", "outer diameter [mm]", MM, 0.0, None, True),
-        Key("inner_diameter_mm", "inner diameter [mm], 0 for solid", MM, 0.0),
-        Key("youngs_modulus_mpa", "Young's modulus [MPa]", MPA, 0.0, None, True),
-        Key("poisson_ratio", "Poisson's ratio [-]", 1.0, -1.0, 0.5, True),
-        Key("density_kg_m3", "density [kg/m^3]", 1.0, 0.0, None, True),
-        Key(
-            "friction_angle_deg",
-            "optional: backlash/friction play of the transmission [deg]",
-            DEG,
-            0.0,
-            90.0,
-            default=0.0,
-        ),
-    )
+def _sections() -> dict[str, tuple[Key, ...]]:
+    """The numeric keys of each section, from the registry (:mod:`design.registry`): one
+    key per quantity (a vector's three parameters share theirs), in the registry's order."""
+    sections: dict[str, list[Key]] = {"robot": [], "robot.catheter": [], "robot.wire": []}
+    for p in PARAMETERS.values():
+        if p.key is None or p.field is None:
+            continue
+        vector = "[" in p.field
+        if vector and not p.field.endswith("[0]"):
+            continue
+        section, leaf = p.key.rsplit(".", 1)
+        meaning = p.meaning.rsplit(",", 1)[0] if vector else p.meaning
+        label, size = file_unit(p.name)
+        optional = "optional: " if p.default is not None else ""
+        sections.setdefault(section, []).append(
+            Key(leaf, f"{optional}{meaning} [{label}]", size, p.low, p.high, p.low_open,
+                vector, p.default)
+        )
+    return {name: tuple(keys) for name, keys in sections.items()}
 
 
-SECTIONS: dict[str, tuple[Key, ...]] = {
-    "robot": (Key("free_length_mm", "free length [mm]", MM, 0.0, None, True),),
-    "robot.catheter": _tube_keys(),
-    "robot.wire": _tube_keys(),
-    "tip": (
-        Key("magnet_outer_diameter_mm", "ring outer diameter [mm]", MM, 0.0, None, True),
-        Key("magnet_inner_diameter_mm", "ring inner diameter [mm]", MM, 0.0),
-        Key("magnet_length_mm", "ring length [mm]", MM, 0.0, None, True),
-        Key("remanence_t", "ring remanence [T]", 1.0, 0.0, 1.6),
-        Key("gap_mm", "face-to-face gap [mm]", MM, 0.0),
-        Key("density_kg_m3", "ring density [kg/m^3]", 1.0, 0.0, None, True),
-        Key("mass_g", "optional: extra tip mass, mounting pieces [g]", GRAM, 0.0, default=0.0),
-    ),
-    "external_magnet": (
-        Key("diameter_mm", "cylinder diameter [mm]", MM, 0.0, None, True),
-        Key("length_mm", "cylinder length [mm]", MM, 0.0, None, True),
-        Key("remanence_t", "remanence [T]", 1.0, 0.0, 1.6),
-        Key("center_mm", "centre, base frame [mm]", MM, vector=True),
-        Key("magnetization", "unit magnetisation direction, base frame", 1.0, vector=True),
-    ),
-    "environment": (Key("gravity_m_s2", "gravity, base frame [m/s^2]", 1.0, vector=True),),
-}
+SECTIONS: dict[str, tuple[Key, ...]] = _sections()
 OPTIONAL_SECTIONS = {"environment"}
 OPTIONAL_KEYS = {"environment.gravity_m_s2"}
 TOP_KEYS = {"name", "description", "robot", "tip", "external_magnet", "environment"}
@@ -323,53 +306,32 @@ def default_design() -> Design:
 
 def _file_units(x: float, scale: float) -> float:
     """SI value in file units, rounded to 12 significant digits so 1.8 mm stays 1.8."""
-    return float(f"{x / scale:.12g}")
+    return x if scale == 1.0 else float(f"{x / scale:.12g}")
 
 
 def design_to_dict(design: Design) -> dict[str, Any]:
-    """The design-file document (file units) of a :class:`Design`."""
-
-    def tube(t: Tube) -> dict[str, float]:
-        doc = {
-            "outer_diameter_mm": _file_units(t.outer_diameter, MM),
-            "inner_diameter_mm": _file_units(t.inner_diameter, MM),
-            "youngs_modulus_mpa": _file_units(t.youngs_modulus, MPA),
-            "poisson_ratio": t.poisson_ratio,
-            "density_kg_m3": t.density,
-        }
-        if t.friction_angle:
-            doc["friction_angle_deg"] = _file_units(t.friction_angle, DEG)
-        return doc
-
-    tip, ext = design.tip, design.external_magnet
+    """The design-file document (file units) of a :class:`Design`: every key of
+    :data:`SECTIONS`, optional keys only where they differ from their default."""
     doc: dict[str, Any] = {"name": design.name}
     if design.description:
         doc["description"] = design.description
-    doc["robot"] = {
-        "free_length_mm": _file_units(design.robot.free_length, MM),
-        "catheter": tube(design.robot.catheter),
-        "wire": tube(design.robot.wire),
-    }
-    doc["tip"] = {
-        "magnet_outer_diameter_mm": _file_units(tip.magnet_outer_diameter, MM),
-        "magnet_inner_diameter_mm": _file_units(tip.magnet_inner_diameter, MM),
-        "magnet_length_mm": _file_units(tip.magnet_length, MM),
-        "remanence_t": tip.remanence,
-        "gap_mm": _file_units(tip.gap, MM),
-        "density_kg_m3": tip.density,
-    }
-    if tip.mass:
-        doc["tip"]["mass_g"] = _file_units(tip.mass, GRAM)
-    doc["external_magnet"] = {
-        "shape": ext.shape,
-        "diameter_mm": _file_units(ext.diameter, MM),
-        "length_mm": _file_units(ext.length, MM),
-        "remanence_t": ext.remanence,
-        "center_mm": [_file_units(c, MM) for c in ext.center],
-        "magnetization": list(ext.magnetization),
-    }
-    if design.environment.gravity is not None:
-        doc["environment"] = {"gravity_m_s2": list(design.environment.gravity)}
+    doc["robot"] = {}
+    doc["tip"] = {}
+    doc["external_magnet"] = {"shape": design.external_magnet.shape}
+    for p in PARAMETERS.values():
+        if p.key is None or p.field is None:
+            continue
+        section, leaf = p.key.rsplit(".", 1)
+        if section == "environment" and design.environment.gravity is None:
+            continue
+        node = doc
+        for part in section.split("."):
+            node = node.setdefault(part, {})
+        value = p.value(design)
+        if "[" in p.field:
+            node.setdefault(leaf, []).append(_file_units(value, file_unit(p.name)[1]))
+        elif p.default is None or value != p.default:
+            node[leaf] = _file_units(value, file_unit(p.name)[1])
     return doc
 
 

@@ -27,6 +27,26 @@ from design.units import DEG, GRAM, MM, MPA
 
 
 @dataclass(frozen=True)
+class Fit:
+    """How calibration frees a parameter (:mod:`optimize.fitting.calibrate`).
+
+    kind : 'log' (fit u = ln(p / p0), for positive quantities) or 'linear'
+        (fit u = (p - p0) / step).
+    lower, upper : admissible physical range of the fit (absolute). [SI]
+    prior : one-sigma width of the optional prior, in fit units (log: relative).
+    step : SI value of one fit unit for 'linear'. [SI]
+    span : for 'linear', the fit may move at most this far from the nominal value. [SI]
+    """
+
+    kind: str
+    lower: float
+    upper: float
+    prior: float
+    step: float = 1.0
+    span: float = np.inf
+
+
+@dataclass(frozen=True)
 class Parameter:
     """One scalar model input.
 
@@ -35,12 +55,25 @@ class Parameter:
         ``"external_magnet.center[0]"``); None for a factor of the model alone (always 1
         in a design, freed by calibration).
     unit : its SI unit.
+    key : its design-file key, ``section.key`` (vectors: one key for three parameters).
+    low, high, low_open : the range a design file admits, in file units (None: unbounded).
+    default : for a key the file may leave out, its value. [SI]
+    tolerance : manufacturing or placement tolerance, one sigma: ('rel', fraction) or
+        ('abs', SI value); None where the tolerance study leaves it exact.
+    fit : how calibration frees it; None where it cannot.
     """
 
     name: str
     unit: str
     meaning: str
     field: str | None
+    key: str | None = None
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    default: float | None = None
+    tolerance: tuple[str, float] | None = None
+    fit: Fit | None = None
 
     def value(self, design: Design) -> float:
         """Its value in ``design``. [unit]"""
@@ -61,55 +94,120 @@ def _split(field: str) -> tuple[list[str], int | None]:
     return path.split("."), (int(rest.rstrip("]")) if rest else None)
 
 
-def _vector(prefix: str, unit: str, meaning: str, field: str) -> list[Parameter]:
+def _vector(prefix: str, unit: str, meaning: str, field: str, key: str, **kw: Any) -> list:
     return [
-        Parameter(f"{prefix}_{a}", unit, f"{meaning}, {a}", f"{field}[{i}]")
+        Parameter(f"{prefix}_{a}", unit, f"{meaning}, {a}", f"{field}[{i}]", key, **kw)
         for i, a in enumerate("xyz")
     ]
 
 
+_MODULUS_FIT = Fit("log", 1e5, 1e12, 0.5)
+_REMANENCE_FIT = Fit("log", 0.05, 2.5, 0.1)
+_FRICTION_FIT = Fit("linear", 0.0, 45 * DEG, 5.0, DEG)
+_PLACEMENT_FIT = Fit("linear", -10.0, 10.0, 5.0, MM, 0.05)
+
+
+def _tube(tube: str, modulus_tolerance: float) -> list[Parameter]:
+    """The parameters of one coaxial element (``robot.<tube>``)."""
+    section = f"robot.{tube}"
+
+    def one(field: str, unit: str, key: str, **kw: Any) -> Parameter:
+        meaning = f"{tube} {field.replace('_', ' ')}"
+        return Parameter(
+            f"{tube}_{field}", unit, meaning, f"{section}.{field}", f"{section}.{key}", **kw
+        )
+
+    return [
+        one("outer_diameter", "m", "outer_diameter_mm", low=0.0, high=50.0, low_open=True),
+        one("inner_diameter", "m", "inner_diameter_mm", low=0.0, high=50.0),
+        one(
+            "youngs_modulus", "Pa", "youngs_modulus_mpa", low=0.0, high=1e6, low_open=True,
+            tolerance=("rel", modulus_tolerance), fit=_MODULUS_FIT,
+        ),
+        one("poisson_ratio", "-", "poisson_ratio", low=-1.0, high=0.5, low_open=True),
+        one("density", "kg/m^3", "density_kg_m3", low=0.0, high=30000.0, low_open=True),
+        one(
+            "friction_angle", "rad", "friction_angle_deg", low=0.0, high=90.0, default=0.0,
+            fit=_FRICTION_FIT,
+        ),
+    ]
+
+
 _TABLE: list[Parameter] = [
-    Parameter("free_length", "m", "clamped base to proximal ring centre", "robot.free_length"),
-    *[
-        Parameter(
-            f"{tube}_{field}", unit, f"{tube} {field.replace('_', ' ')}", f"robot.{tube}.{field}"
-        )
-        for tube in ("catheter", "wire")
-        for field, unit in (
-            ("outer_diameter", "m"),
-            ("inner_diameter", "m"),
-            ("youngs_modulus", "Pa"),
-            ("poisson_ratio", "-"),
-            ("density", "kg/m^3"),
-            ("friction_angle", "rad"),
-        )
-    ],
-    Parameter("magnet_outer_diameter", "m", "ring outer diameter", "tip.magnet_outer_diameter"),
-    Parameter("magnet_inner_diameter", "m", "ring inner diameter", "tip.magnet_inner_diameter"),
-    Parameter("magnet_length", "m", "ring length", "tip.magnet_length"),
-    Parameter("magnet_remanence", "T", "ring remanence", "tip.remanence"),
-    Parameter("magnet_gap", "m", "face-to-face gap of the rings", "tip.gap"),
-    Parameter("magnet_density", "kg/m^3", "ring density", "tip.density"),
-    Parameter("tip_mass", "kg", "extra mass at the tip (mounting pieces)", "tip.mass"),
-    Parameter("external_diameter", "m", "external cylinder diameter", "external_magnet.diameter"),
-    Parameter("external_length", "m", "external cylinder length", "external_magnet.length"),
     Parameter(
-        "external_remanence", "T", "external magnet remanence", "external_magnet.remanence"
+        "free_length", "m", "clamped base to proximal ring centre", "robot.free_length",
+        "robot.free_length_mm", 0.0, 10000.0, True,
+        fit=Fit("linear", 1e-3, 10.0, 5.0, MM, 0.05),
     ),
-    *_vector("external_center", "m", "external magnet centre", "external_magnet.center"),
+    # NiTi wire moduli spread less than extruded tubes' (5 % against 10 %)
+    *_tube("catheter", 0.10),
+    *_tube("wire", 0.05),
+    # ground magnet rings hold +-0.02 mm; NdFeB grades spread 2 % in remanence
+    Parameter(
+        "magnet_outer_diameter", "m", "ring outer diameter", "tip.magnet_outer_diameter",
+        "tip.magnet_outer_diameter_mm", 0.0, 100.0, True, tolerance=("abs", 0.02 * MM),
+    ),
+    Parameter(
+        "magnet_inner_diameter", "m", "ring inner diameter", "tip.magnet_inner_diameter",
+        "tip.magnet_inner_diameter_mm", 0.0, 100.0, tolerance=("abs", 0.02 * MM),
+    ),
+    Parameter(
+        "magnet_length", "m", "ring length", "tip.magnet_length", "tip.magnet_length_mm",
+        0.0, 100.0, True, tolerance=("abs", 0.02 * MM),
+    ),
+    Parameter(
+        "magnet_remanence", "T", "ring remanence", "tip.remanence", "tip.remanence_t",
+        0.0, 1.6, tolerance=("rel", 0.02), fit=_REMANENCE_FIT,
+    ),
+    Parameter(
+        "magnet_gap", "m", "face-to-face gap of the rings", "tip.gap", "tip.gap_mm", 0.0, 100.0
+    ),
+    Parameter(
+        "magnet_density", "kg/m^3", "ring density", "tip.density", "tip.density_kg_m3",
+        0.0, 30000.0, True,
+    ),
+    Parameter(
+        "tip_mass", "kg", "extra mass at the tip (mounting pieces)", "tip.mass", "tip.mass_g",
+        0.0, 1000.0, default=0.0, fit=Fit("linear", 0.0, 0.5, 1.0, 1e-3),
+    ),
+    Parameter(
+        "external_diameter", "m", "external cylinder diameter", "external_magnet.diameter",
+        "external_magnet.diameter_mm", 0.0, 10000.0, True,
+    ),
+    Parameter(
+        "external_length", "m", "external cylinder length", "external_magnet.length",
+        "external_magnet.length_mm", 0.0, 10000.0, True,
+    ),
+    Parameter(
+        "external_remanence", "T", "external magnet remanence", "external_magnet.remanence",
+        "external_magnet.remanence_t", 0.0, 1.6, tolerance=("rel", 0.02), fit=_REMANENCE_FIT,
+    ),
+    # the external magnet is placed to +-1 mm
+    *_vector(
+        "external_center", "m", "external magnet centre", "external_magnet.center",
+        "external_magnet.center_mm", tolerance=("abs", 1 * MM), fit=_PLACEMENT_FIT,
+    ),
     *_vector(
         "external_magnetization",
         "-",
         "external magnetisation direction",
         "external_magnet.magnetization",
+        "external_magnet.magnetization",
+        fit=Fit("linear", -2.0, 2.0, 5.0, 0.01, 0.5),
     ),
-    *_vector("gravity", "m/s^2", "acceleration of gravity", "environment.gravity"),
+    *_vector(
+        "gravity", "m/s^2", "acceleration of gravity", "environment.gravity",
+        "environment.gravity_m_s2",
+    ),
     *[
-        Parameter(name, "-", f"calibration factor on the {what} (1 = as designed)", None)
-        for name, what in (
-            ("bending_rigidity_scale", "bending rigidity EI of catheter + wire"),
-            ("wire_torsion_scale", "torsional rigidity GJ of the wire"),
-            ("catheter_torsion_scale", "torsional rigidity GJ of the catheter"),
+        Parameter(
+            name, "-", f"calibration factor on the {what} (1 = as designed)", None,
+            fit=Fit("log", 1e-3, 1e3, prior),
+        )
+        for name, what, prior in (
+            ("bending_rigidity_scale", "bending rigidity EI of catheter + wire", 0.5),
+            ("wire_torsion_scale", "torsional rigidity GJ of the wire", 1.0),
+            ("catheter_torsion_scale", "torsional rigidity GJ of the catheter", 1.0),
         )
     ],
     Parameter("load_scale", "-", "multiplies every load (1 = physical; continuation)", None),
@@ -118,6 +216,8 @@ _TABLE: list[Parameter] = [
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in _TABLE}
 NAMES: tuple[str, ...] = tuple(PARAMETERS)
 """Parameter names in vector order."""
+FITTED: tuple[str, ...] = tuple(n for n in NAMES if PARAMETERS[n].fit is not None)
+"""The parameters calibration can free, in vector order."""
 
 
 def parameter_vector(design: Design) -> np.ndarray:

@@ -39,27 +39,16 @@ from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
-from design.registry import index
-from design.units import MM
+from design.registry import PARAMETERS, index
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import Study
 from ringpair.tables import effect_shifts
 
-TOLERANCES = {  # parameter -> (kind, one-sigma): relative for 'rel', absolute [SI] for 'abs'
-    "magnet_remanence": ("rel", 0.02),
-    "magnet_outer_diameter": ("abs", 0.02 * MM),
-    "magnet_inner_diameter": ("abs", 0.02 * MM),
-    "magnet_length": ("abs", 0.02 * MM),
-    "catheter_youngs_modulus": ("rel", 0.10),
-    "wire_youngs_modulus": ("rel", 0.05),
-    "external_remanence": ("rel", 0.02),
-    "external_center_x": ("abs", 1 * MM),
-    "external_center_y": ("abs", 1 * MM),
-    "external_center_z": ("abs", 1 * MM),
-}
-"""Manufacturing and placement tolerances of the Monte Carlo (one sigma): grade spread of
-NdFeB remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %),
-NiTi wire (5 %), and +-1 mm placement of the external magnet."""
+TOLERANCES = {n: p.tolerance for n, p in PARAMETERS.items() if p.tolerance is not None}
+"""Manufacturing and placement tolerances of the Monte Carlo (one sigma), parameter ->
+('rel', fraction) or ('abs', SI value), from :mod:`design.registry`: grade spread of NdFeB
+remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %), NiTi
+wire (5 %), and +-1 mm placement of the external magnet."""
 
 EFFECTS_PATH = np.deg2rad(np.arange(0.0, 181.0, 12.0))
 """theta1 of the effects stage [rad], driven in order with theta2 = 0: the paper's planar

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -37,8 +37,8 @@ from scipy.optimize import least_squares
 from design.geometry import rest_position
 from design.model import RingPairModel, model_for
 from design.records import Design
-from design.registry import index
-from design.units import DEG, GRAM, MM, MPA
+from design.registry import PARAMETERS, Fit, file_unit, index
+from design.units import MM
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.paper_grid import (
     PAPER_FIELD_GRID,
@@ -91,66 +91,24 @@ TIP_ANGLE_SIGMA = np.deg2rad(3.0)
 
 
 @dataclass(frozen=True)
-class FreeParameter:
-    """How one model parameter is fitted.
+class FreeParameter(Fit):
+    """How one model parameter is fitted: its :class:`design.registry.Fit`, its name and
+    the unit shown in reports (label, factor from SI)."""
 
-    kind : 'log' (fit u = ln(p / p0), for positive quantities) or 'linear'
-        (fit u = (p - p0) / unit).
-    unit : SI value of one fit unit for 'linear' (1e-3: millimetres). [SI]
-    lower, upper : admissible physical range (absolute). [SI]
-    span : for 'linear', the fit may move at most this far from the nominal value. [SI]
-    prior : one-sigma width of the optional prior, in fit units (log: relative).
-    label : unit shown in reports, with its factor from SI.
-    """
-
-    name: str
-    kind: str
-    lower: float
-    upper: float
-    prior: float
-    unit: float = 1.0
-    span: float = np.inf
+    name: str = ""
     label: tuple[str, float] = ("", 1.0)
 
 
-def _log(
-    name: str, lower: float, upper: float, prior: float, label: tuple[str, float] = ("", 1.0)
-) -> FreeParameter:
-    return FreeParameter(name, "log", lower, upper, prior, label=label)
+def _free_parameter(name: str) -> FreeParameter:
+    """How ``name`` is fitted, from the registry."""
+    fit = PARAMETERS[name].fit
+    assert fit is not None
+    label, size = file_unit(name)
+    shown = ("", 1.0) if PARAMETERS[name].unit == "-" else (label, 1 / size)
+    return FreeParameter(**asdict(fit), name=name, label=shown)
 
 
-FREE_PARAMETERS: dict[str, FreeParameter] = {
-    p.name: p
-    for p in (
-        _log("bending_rigidity_scale", 1e-3, 1e3, 0.5),
-        _log("wire_torsion_scale", 1e-3, 1e3, 1.0),
-        _log("catheter_torsion_scale", 1e-3, 1e3, 1.0),
-        _log("external_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
-        _log("magnet_remanence", 0.05, 2.5, 0.1, ("T", 1.0)),
-        _log("catheter_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
-        _log("wire_youngs_modulus", 1e5, 1e12, 0.5, ("MPa", 1 / MPA)),
-        *(
-            FreeParameter(
-                f"external_center_{a}", "linear", -10.0, 10.0, 5.0, MM, 0.05, ("mm", 1 / MM)
-            )
-            for a in "xyz"
-        ),
-        *(
-            FreeParameter(
-                f"external_magnetization_{a}", "linear", -2.0, 2.0, 5.0, 0.01, 0.5, ("", 1.0)
-            )
-            for a in "xyz"
-        ),
-        FreeParameter("free_length", "linear", 1e-3, 10.0, 5.0, MM, 0.05, ("mm", 1 / MM)),
-        FreeParameter(
-            "wire_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
-        ),
-        FreeParameter(
-            "catheter_friction_angle", "linear", 0.0, 45 * DEG, 5.0, DEG, label=("deg", 1 / DEG)
-        ),
-        FreeParameter("tip_mass", "linear", 0.0, 0.5, 1.0, GRAM, label=("g", 1 / GRAM)),
-    )
-}
+FREE_PARAMETERS: dict[str, FreeParameter] = {n: _free_parameter(n) for n in SENSITIVE}
 """The parameters calibration can free, with their fit units, bounds and prior widths."""
 
 BASELINE_FREE = (
@@ -331,13 +289,13 @@ class _Problem:
     def params(self, u: np.ndarray) -> np.ndarray:
         p = self.base.copy()
         for j, (spec, p0) in enumerate(zip(self.spec, self.p0, strict=True)):
-            p[self.idx[j]] = p0 * np.exp(u[j]) if spec.kind == "log" else p0 + spec.unit * u[j]
+            p[self.idx[j]] = p0 * np.exp(u[j]) if spec.kind == "log" else p0 + spec.step * u[j]
         return p
 
     def dp_du(self, u: np.ndarray) -> np.ndarray:
         p = self.params(u)
         return np.array(
-            [p[i] if s.kind == "log" else s.unit for i, s in zip(self.idx, self.spec, strict=True)]
+            [p[i] if s.kind == "log" else s.step for i, s in zip(self.idx, self.spec, strict=True)]
         )
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -347,8 +305,8 @@ class _Problem:
                 lo.append(np.log(spec.lower / p0))
                 hi.append(np.log(spec.upper / p0))
             else:
-                lo.append(max(spec.lower - p0, -spec.span) / spec.unit)
-                hi.append(min(spec.upper - p0, spec.span) / spec.unit)
+                lo.append(max(spec.lower - p0, -spec.span) / spec.step)
+                hi.append(min(spec.upper - p0, spec.span) / spec.step)
         return np.array(lo), np.array(hi)
 
     def evaluate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, Prediction]:
@@ -441,7 +399,7 @@ def calibrate(
         [
             np.log(start[n] / nominal[n])
             if FREE_PARAMETERS[n].kind == "log"
-            else (start[n] - nominal[n]) / FREE_PARAMETERS[n].unit
+            else (start[n] - nominal[n]) / FREE_PARAMETERS[n].step
             for n in names
         ]
     )
@@ -612,6 +570,3 @@ def cross_validate(
         unconverged=int(np.count_nonzero(~ok)),
     )
 
-
-if set(FREE_PARAMETERS) != set(SENSITIVE):  # pragma: no cover - a programming error
-    raise ImportError("FREE_PARAMETERS and sensitivity.SENSITIVE must name the same")

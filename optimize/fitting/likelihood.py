@@ -56,12 +56,12 @@ def _to_u(name: str, value: float) -> float:
     return (
         math.log(value)
         if FREE_PARAMETERS[name].kind == "log"
-        else value / FREE_PARAMETERS[name].unit
+        else value / FREE_PARAMETERS[name].step
     )
 
 
 def _from_u(name: str, u: float) -> float:
-    return math.exp(u) if FREE_PARAMETERS[name].kind == "log" else u * FREE_PARAMETERS[name].unit
+    return math.exp(u) if FREE_PARAMETERS[name].kind == "log" else u * FREE_PARAMETERS[name].step
 
 
 def _range(name: str, nominal: float) -> tuple[float, float]:
@@ -94,7 +94,7 @@ def profile_intervals(
         u_hat = _to_u(name, fit.estimate[name])
         # The linear standard error in fit units: the first step of each end's search.
         spec = FREE_PARAMETERS[name]
-        se = fit.standard_error[name] / (fit.estimate[name] if spec.kind == "log" else spec.unit)
+        se = fit.standard_error[name] / (fit.estimate[name] if spec.kind == "log" else spec.step)
         se = se if np.isfinite(se) and se > 0 else spec.prior
         fits = 0
         ends = []

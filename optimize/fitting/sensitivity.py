@@ -24,7 +24,7 @@ from design.compiled import compile_function, evaluate_columns
 from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.friction import play, play_step
 from design.model import RingPairModel
-from design.registry import NAMES, index
+from design.registry import FITTED, NAMES, index
 from optimize.fitting.measurements import Measurements
 
 THREADS = 2
@@ -39,27 +39,9 @@ friction play depends on the order. With ``torsion`` (multistable rings) or
 ``large_deflection`` the path itself is followed."""
 
 
-SENSITIVE = (
-    "bending_rigidity_scale",
-    "wire_torsion_scale",
-    "catheter_torsion_scale",
-    "external_remanence",
-    "magnet_remanence",
-    "catheter_youngs_modulus",
-    "wire_youngs_modulus",
-    "external_center_x",
-    "external_center_y",
-    "external_center_z",
-    "external_magnetization_x",
-    "external_magnetization_y",
-    "external_magnetization_z",
-    "free_length",
-    "wire_friction_angle",
-    "catheter_friction_angle",
-    "tip_mass",
-)
-"""Parameters whose derivatives :func:`sensitivity_function` returns, in this order (the
-ones calibration can free)."""
+SENSITIVE = FITTED
+"""Parameters whose derivatives :func:`sensitivity_function` returns, in this order: the
+ones calibration can free (:data:`design.registry.FITTED`)."""
 
 
 @lru_cache(maxsize=16)

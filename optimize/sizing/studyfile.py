@@ -95,7 +95,7 @@ from design.designfile import DesignError, default_design, load_design
 from design.geometry import WIRE_CLEARANCE
 from design.model import EFFECTS
 from design.records import Design
-from design.registry import current, file_key, file_unit
+from design.registry import PARAMETERS, current, file_key, file_unit
 from design.suggest import did_you_mean
 from design.units import DEG, MM, MM3
 from optimize.sizing.materials import MATERIALS
@@ -118,23 +118,29 @@ class FreeKey:
     high: float
 
 
-def _free_key(name: str, meaning: str, low_open: bool, high: float) -> FreeKey:
-    """A free model parameter, its key and unit from :mod:`design.registry`; ``high`` in
-    file units."""
-    return FreeKey(file_key(name), name, meaning, file_unit(name)[1], 0, low_open, high)
+def _free_key(name: str) -> FreeKey:
+    """A free model parameter, its key, unit, meaning and range from :mod:`design.registry`."""
+    p = PARAMETERS[name]
+    assert p.low is not None and p.high is not None
+    return FreeKey(file_key(name), name, p.meaning, file_unit(name)[1], p.low, p.low_open, p.high)
 
 
 FREE_KEYS: dict[str, FreeKey] = {
     k.key: k
     for k in (
-        _free_key("magnet_outer_diameter", "ring OD", True, 100),
-        _free_key("magnet_inner_diameter", "ring ID", False, 100),
-        _free_key("magnet_length", "ring length", True, 100),
-        _free_key("magnet_gap", "ring gap", False, 100),
-        _free_key("catheter_outer_diameter", "catheter OD", True, 50),
-        _free_key("catheter_inner_diameter", "catheter ID", False, 50),
-        _free_key("catheter_youngs_modulus", "catheter modulus", True, 1e6),
-        _free_key("wire_outer_diameter", "wire OD", True, 50),
+        *(
+            _free_key(name)
+            for name in (
+                "magnet_outer_diameter",
+                "magnet_inner_diameter",
+                "magnet_length",
+                "magnet_gap",
+                "catheter_outer_diameter",
+                "catheter_inner_diameter",
+                "catheter_youngs_modulus",
+                "wire_outer_diameter",
+            )
+        ),
         # not a model parameter: the magnet placed on the axis (design.geometry)
         FreeKey("external_distance_mm", "external_distance", "magnet distance", MM, 0, True, 10000),
     )
