@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import dataclasses
 
-import casadi as ca
 import numpy as np
 import pytest
 
 from design.equilibrium import solve_design
-from design.geometry import disc_radius, segment_distances, winding_number
 from design.workspace import angle_grid, sweep_workspace
 
 
@@ -50,47 +48,6 @@ def test_neutral_deflection_vanishes_without_spacing(demonstrator):
     ws = sweep_workspace(dataclasses.replace(demonstrator, tip=tip), np.deg2rad(30))
     assert ws.neutral_deflection < 1e-12
     assert sweep_workspace(demonstrator, np.deg2rad(30)).neutral_deflection > 1e-4
-
-
-def test_disc_radius_of_a_square_loop_is_its_half_side():
-    # The nearest points are the sides' midpoints (2), not the corners (2 sqrt 2).
-    square = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]], float) * 2.0
-    np.testing.assert_allclose(segment_distances(square), 2.0, rtol=1e-15)
-    assert disc_radius(square) == pytest.approx(2.0, rel=1e-15)
-    assert winding_number(square) == 1 and winding_number(square[::-1]) == -1
-    assert disc_radius(square[::-1]) == pytest.approx(2.0, rel=1e-15)  # clockwise
-    assert winding_number(square + [5.0, 0.0]) == 0
-    assert disc_radius(square + [5.0, 0.0]) == 0.0  # not around the origin
-
-
-@pytest.mark.parametrize("sides", [3, 7, 24])
-def test_disc_radius_of_a_regular_polygon_is_its_apothem(sides):
-    # A regular polygon of circumradius R has the apothem R cos(pi / n); moved by c, the
-    # origin lies R cos(pi / n) + c . n_i from side i (outward normal n_i).
-    phi = 0.3 + 2 * np.pi * np.arange(sides) / sides
-    polygon = 1.5 * np.column_stack([np.cos(phi), np.sin(phi)])
-    apothem = 1.5 * np.cos(np.pi / sides)
-    assert disc_radius(polygon) == pytest.approx(apothem, rel=1e-14)
-    centre = np.array([0.2, -0.1])
-    normal = phi + np.pi / sides
-    expected = np.min(apothem + np.column_stack([np.cos(normal), np.sin(normal)]) @ centre)
-    assert disc_radius(polygon + centre) == pytest.approx(expected, rel=1e-13)
-
-
-def test_disc_radius_is_the_same_on_casadi_symbols():
-    rng = np.random.default_rng(3)
-    phi = np.sort(rng.uniform(0, 2 * np.pi, 40))
-    loop = (1 + 0.3 * rng.random(40))[:, None] * np.column_stack([np.cos(phi), np.sin(phi)])
-    symbol = ca.SX.sym("loop", 40, 2)
-    outputs = [segment_distances(symbol), winding_number(symbol), disc_radius(symbol)]
-    sides, winding, disc = (
-        np.asarray(v).ravel() for v in ca.Function("f", [symbol], outputs)(loop)
-    )
-    np.testing.assert_allclose(sides, segment_distances(loop), rtol=1e-12)
-    assert winding == pytest.approx(1.0, abs=1e-12)
-    assert disc == pytest.approx(disc_radius(loop), rel=1e-12)
-    outside = ca.Function("f", [symbol], [disc_radius(symbol)])(loop + [3.0, 0.0])
-    assert float(outside) == 0.0
 
 
 def test_angle_grid_covers_one_turn():
