@@ -124,19 +124,23 @@ def _offset_from_rest(free_length: Any, magnet_centre: Any, symbolic: bool) -> t
 
 
 def external_distance(free_length: Any, magnet_centre: Any) -> Any:
-    """Distance of the external magnet's centre from the rest tip. [m]"""
+    """Distance of the external magnet's centre (shape (3,); numpy: (..., 3)) from the rest
+    tip. [m]"""
     symbolic = is_symbolic(free_length, magnet_centre)
     _, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
-    return ca.norm_2(offset) if symbolic else float(np.linalg.norm(offset))
+    return ca.norm_2(offset) if symbolic else np.linalg.norm(offset, axis=-1)
 
 
 def magnet_centre_at(free_length: Any, magnet_centre: Any, distance: Any) -> Any:
     """The external magnet's centre moved along the line from the rest tip through
-    ``magnet_centre`` to ``distance`` from the rest tip, shape (3,). [m]"""
+    ``magnet_centre`` to ``distance`` from the rest tip, shape (3,) (numpy: centres
+    (..., 3) and distances (...) broadcast). [m]"""
     symbolic = is_symbolic(free_length, magnet_centre, distance)
     rest, offset = _offset_from_rest(free_length, magnet_centre, symbolic)
-    norm = ca.norm_2(offset) if symbolic else np.linalg.norm(offset)
-    return rest + distance * (offset / norm)
+    if symbolic:
+        return rest + distance * (offset / ca.norm_2(offset))
+    norm = np.linalg.norm(offset, axis=-1, keepdims=True)
+    return rest + np.asarray(distance, float)[..., None] * (offset / norm)
 
 
 def segment_distances(loop: Any) -> Any:
@@ -199,7 +203,7 @@ def ring_clears_wire(
     magnet_inner_diameter: float, wire_outer_diameter: float, clearance: float = WIRE_CLEARANCE
 ) -> bool:
     """Whether the ring's bore clears the wire by ``clearance`` (:data:`WIRE_CLEARANCE`),
-    within :data:`FIT_TOLERANCE`. [m]"""
+    within :data:`FIT_TOLERANCE` (diameters and clearance in m)."""
     return magnet_inner_diameter - wire_outer_diameter >= clearance - FIT_TOLERANCE
 
 

@@ -331,3 +331,15 @@ def test_disc_radius_is_the_same_on_casadi_symbols():
     assert disc == pytest.approx(disc_radius(loop), rel=1e-12)
     outside = ca.Function("f", [symbol], [disc_radius(symbol)])(loop + [3.0, 0.0])
     assert float(outside) == 0.0
+
+
+def test_external_distance_parameterisation_broadcasts_over_batches():
+    # A batch of centres and distances gives each its own answer, as one at a time does.
+    rng = np.random.default_rng(11)
+    centres = rng.uniform([0.2, -0.05, -0.05], [0.4, 0.05, 0.05], (7, 3))
+    distances = rng.uniform(0.02, 0.2, 7)
+    batch = magnet_centre_at(0.15, centres, distances)
+    for k in range(7):
+        one = magnet_centre_at(0.15, centres[k], distances[k])
+        assert np.allclose(batch[k], one, rtol=0, atol=1e-15), f"point {k}"
+    assert np.allclose(external_distance(0.15, batch), distances, rtol=1e-12)
