@@ -23,10 +23,11 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
-from design.designfile import default_design, design_from_dict, design_to_dict
+from design.designfile import default_design, load_design
 from design.equilibrium import TOLERANCE, kernels, solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
 from design.records import Design
@@ -36,22 +37,8 @@ SAME = 1e-5
 
 
 def near_magnet() -> Design:
-    doc = design_to_dict(default_design())
-    doc["name"] = "near magnet"
-    doc["robot"]["free_length_mm"] = 140.0
-    doc["tip"].update(
-        magnet_outer_diameter_mm=3.5,
-        magnet_inner_diameter_mm=1.0,
-        magnet_length_mm=0.8,
-        gap_mm=0.3,
-    )
-    doc["external_magnet"].update(
-        diameter_mm=25.0,
-        length_mm=80.0,
-        center_mm=[198.0, 0.0, 0.0],
-        magnetization=[-1.0, 0.0, 0.0],
-    )
-    return design_from_dict(doc)
+    """The near-magnet set-up of the README (examples/near_magnet.toml)."""
+    return load_design(Path(__file__).resolve().parents[1] / "examples" / "near_magnet.toml")
 
 
 def newton_from_straight(model, params, command, iterations=40):

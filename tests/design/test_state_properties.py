@@ -11,6 +11,9 @@ Hessian of that chain's energy. The seed of each case is in its test id.
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 from oracle import (
@@ -25,10 +28,10 @@ from oracle import (
 )
 from setups import EFFECT_SETS, random_design
 
-from design.designfile import default_design, design_from_dict, design_to_dict
+from design.designfile import load_design
 from design.equilibrium import solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
-from design.records import Design
+from design.records import Design, Environment
 from design.sections import bending_rigidity
 
 AGREEMENT = 1e-5
@@ -200,26 +203,13 @@ def test_mirror_symmetric_setups_give_mirror_symmetric_states(seed):
 
 
 def near_magnet_design() -> Design:
-    """The near-magnet case of the issue that defined the state: the demonstrator's tubes,
-    rings 3.5 / 1.0 mm x 0.8 mm with a 0.3 mm gap, free length 140 mm, an N52 cylinder
-    25 mm x 80 mm centred at x = 198 mm, magnetised along -x (its face 18 mm beyond the
-    rest tip), no gravity: a set-up symmetric about the robot's axis."""
-    doc = design_to_dict(default_design())
-    doc["robot"]["free_length_mm"] = 140.0
-    doc["tip"].update(
-        magnet_outer_diameter_mm=3.5,
-        magnet_inner_diameter_mm=1.0,
-        magnet_length_mm=0.8,
-        gap_mm=0.3,
-    )
-    doc["external_magnet"].update(
-        diameter_mm=25.0,
-        length_mm=80.0,
-        center_mm=[198.0, 0.0, 0.0],
-        magnetization=[-1.0, 0.0, 0.0],
-    )
-    doc.pop("environment", None)
-    return design_from_dict(doc)
+    """The near-magnet case of the issue that defined the state (examples/near_magnet.toml,
+    the README's case): the demonstrator's tubes, rings 3.5 / 1.0 mm x 0.8 mm with a 0.3 mm
+    gap, free length 140 mm, an N52 cylinder 25 mm x 80 mm centred at x = 198 mm,
+    magnetised along -x (its face 18 mm beyond the rest tip); here without gravity, so
+    the set-up is symmetric about the robot's axis."""
+    design = load_design(Path(__file__).resolve().parents[2] / "examples" / "near_magnet.toml")
+    return replace(design, environment=Environment())
 
 
 def test_near_magnet_case_gives_the_states_reached_by_bringing_the_magnet_up():
