@@ -75,6 +75,14 @@ made, or MIN_CORRECTION (dimensionless): a corrector that lands far from the pre
 may have found another branch."""
 MAX_CORRECTIONS = 8
 """Newton corrections per ramp step before the step is refused."""
+LEAP_STEPS = 2
+LEAP_CORRECTIONS = 4
+"""Where the ramp of the linear rod needs at most LEAP_STEPS equal steps (the usual case
+away from folds), its predictors, LEAP_CORRECTIONS Newton corrections per step and the
+exact check at full load run in one compiled call (``leap1``, ``leap2``, ...), accepted by
+the ramp's own tests; this halves the time per configuration. (For the large-deflection
+rod the exact check costs four Newton steps and most ramps need more than one step, so
+the adaptive ramp is as fast.)"""
 TARGET_CONTRACTION = CONTRACTION / 2
 """The step control aims at this first contraction: the secant predictor's error grows
 with the square of the step, and so does Newton's contraction, so the next step is the
@@ -189,7 +197,12 @@ class _Kernels:
     dx/dlambda, monitor, clearance), ``relaxation`` and ``descent`` as
     :class:`design.model.RingPairModel`'s;
     ``check`` (x, command, lambda, params) -> (r, exact monitor, position, frame (9,
-    column-major), tip angles, clearance to the external magnet)."""
+    column-major), tip angles, clearance to the external magnet);
+    ``leap<m>`` (command, params) -> (the tangent at rest dx/dlambda; for each of m equal
+    ramp steps from rest to full load: the predictor's move, the LEAP_CORRECTIONS Newton
+    steps (stacked), the residual's infinity norm before each and, but for the last step,
+    the Newton monitor and clearance of the last correction; the state at full load and
+    ``check``'s outputs there): the ramp in one call, where it needs only m steps."""
 
     def __init__(self, model: RingPairModel) -> None:
         self.model = model
@@ -217,10 +230,55 @@ class _Kernels:
             [x, command, lam, prm],
             [r, monitor, position, ca.reshape(frame, 9, 1), angles, clearance],
         )
-        compiled = compile_functions([newton, relaxation, descent, check])
-        self.newton, self.relaxation, self.descent, self.check = compiled
+        leaps = [
+            self._leap(model, newton, relaxation, check, command, prm, count)
+            for count in range(1, LEAP_STEPS + 1)
+            if model.linear_rod
+        ]
+        compiled = compile_functions([newton, relaxation, descent, check, *leaps])
+        self.newton, self.relaxation, self.descent, self.check = compiled[:4]
+        for leap in compiled[4:]:  # run by name: "leap1", "leap2", ...
+            setattr(self, leap.name(), leap)
         self._maps: dict[tuple[str, int], ca.Function] = {}
+        self._tiles: dict[tuple[bytes, int], np.ndarray] = {}
         self._lock = threading.Lock()
+
+    @staticmethod
+    def _leap(
+        model: RingPairModel,
+        newton: ca.Function,
+        relaxation: ca.Function,
+        check: ca.Function,
+        command: ca.SX,
+        prm: ca.SX,
+        count: int,
+    ) -> ca.Function:
+        x = ca.vertcat(ca.SX.zeros(model.n_rod), command)[: model.n_unknowns]
+        # The tangent at rest: (dr/dx)^-1 = K^-1 there, and r is linear in the load (but
+        # for the rings' mutual torque, which goes with its square), so it is minus the
+        # relaxation direction at full load.
+        tangent = -relaxation.call([x, command, 1, prm])[0]
+        before = None
+        h = 1.0 / count
+        outs = [tangent]
+        for k in range(1, count + 1):
+            move = h * tangent
+            if before is not None:  # the ramp's second-order predictor
+                move += 0.5 * h * (tangent - before)
+            outs.append(move)
+            x = x + move
+            steps, residuals = [], []
+            for _ in range(LEAP_CORRECTIONS):
+                r, step, load_tangent, monitor, clearance = newton.call([x, command, k * h, prm])
+                steps.append(step)
+                residuals.append(ca.mmax(ca.fabs(r)))
+                x = x - step
+            outs += [ca.vertcat(*steps), ca.vertcat(*residuals)]
+            if k < count:
+                outs += [monitor, clearance]
+            before, tangent = tangent, load_tangent
+        outs += [x, *check.call([x, command, 1, prm])]
+        return ca.Function(f"leap{count}", [command, prm], outs)
 
     def _mapped(self, which: str, size: int) -> ca.Function:
         key = (which, size)
@@ -229,27 +287,41 @@ class _Kernels:
                 self._maps[key] = getattr(self, which).map(size, "thread", THREADS)
             return self._maps[key]
 
+    def _shared(self, params: np.ndarray, size: int) -> np.ndarray:
+        """``params`` (k,) as the (k, size) column-major input of a map, kept for reuse (a
+        shared input of a threaded map is far slower in CasADi, and copying it for each
+        call costs about as much as a Newton step of the linear rod)."""
+        key = (params.tobytes(), size)
+        with self._lock:
+            if key not in self._tiles:
+                if len(self._tiles) >= 8:
+                    self._tiles.clear()
+                self._tiles[key] = np.tile(params, size).reshape(size, params.size).T
+            return self._tiles[key]
+
     def run(self, which: str, args: list[np.ndarray], params: np.ndarray) -> list[np.ndarray]:
         """Evaluate ``which`` on the columns of ``args`` (each (rows, N)) with ``params``
         shared, shape (k,), or per column, (k, N); in chunks of CHUNK columns, the last one
         padded to a power of two below GRAIN and to a multiple of GRAIN above (few distinct
         map sizes, at most half the work wasted). Returns each output as (rows, N)."""
         n = args[0].shape[1]
-        if params.ndim == 1:  # (a shared input of a threaded map is far slower in CasADi)
-            params = np.broadcast_to(params[:, None], (params.size, n))
         outs: list[list[np.ndarray]] = []
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)
             count = stop - start
             size = min(CHUNK, -(-count // GRAIN) * GRAIN, 1 << (count - 1).bit_length())
-            chunk = [a[:, start:stop] for a in (*args, params)]
+            chunk = [a[:, start:stop] for a in args]
+            if params.ndim == 2:
+                chunk.append(params[:, start:stop])
             if size > count:
                 chunk = [np.pad(c, ((0, 0), (0, size - count)), mode="edge") for c in chunk]
+            if params.ndim == 1:
+                chunk.append(self._shared(params, size))
             results = evaluate_columns(self._mapped(which, size), chunk)
             outs = outs or [[] for _ in results]
             for acc, out in zip(outs, results, strict=True):
                 acc.append(out[:, :count])
-        return [np.concatenate(acc, axis=1) for acc in outs]
+        return [acc[0] if len(acc) == 1 else np.concatenate(acc, axis=1) for acc in outs]
 
 
 @lru_cache(maxsize=32)
@@ -573,6 +645,72 @@ def _initial(model: RingPairModel, command: np.ndarray) -> np.ndarray:
     return x
 
 
+def _corrected(
+    model: RingPairModel,
+    steps: np.ndarray,
+    residuals: np.ndarray,
+    scale: np.ndarray,
+    near: np.ndarray,
+    lam: float,
+) -> np.ndarray:
+    """Whether the compiled Newton corrections of a ramp step (``steps`` stacked, the
+    residual's norm before each) pass :func:`_ramp`'s tests: the first within ``near``
+    of the prediction, each later one CONTRACTION of the one before, up to the first that
+    converges (residual below the tolerance at lam, or a step below
+    :func:`_step_tolerance`); later ones only polish the state to rounding."""
+    n = model.n_unknowns
+    tol = TOLERANCE if lam >= 1.0 else RAMP_TOLERANCE
+    small = _step_tolerance(model, np.array([lam]))[0]
+    going = np.ones(steps.shape[1], bool)
+    converged = np.zeros(steps.shape[1], bool)
+    bound = near
+    for k in range(LEAP_CORRECTIONS):
+        step = np.abs(steps[k * n : (k + 1) * n])
+        done = (residuals[k] < tol) | (np.max(step, axis=0) < small)
+        converged |= going & done
+        size = np.max(step / scale, axis=0)
+        going &= ~done & (size <= bound)
+        bound = CONTRACTION * size
+    return converged
+
+
+def _leap(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    scale: np.ndarray,
+    count: int,
+    checks: _Checks,
+    where: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ramp in ``count`` equal steps, from the compiled ``leap<count>``: (the tangent at
+    rest (n, N), which columns it takes to full load, their states).
+
+    A column is taken exactly where :func:`_ramp` would accept each of these steps: the
+    first predicts a change of at most FIRST_DISPLACEMENT; in each, the corrections pass
+    :func:`_corrected`; below full load the monitor shows no fold crossed, and at full load
+    the state passes the exact check (converged, stable), which is put in ``checks`` at
+    ``where``; the rings stay clear of the external magnet. Other columns are left to the
+    ramp's adaptive steps."""
+    outs = kernels(model).run(f"leap{count}", [command], params)
+    tangent, outs = outs[0], outs[1:]
+    taken = _norm(tangent, scale) <= count * FIRST_DISPLACEMENT
+    for k in range(1, count + 1):
+        move, steps, residuals = outs[:3]
+        near = np.maximum(CORRECTION_RATIO * _norm(move, scale), MIN_CORRECTION)
+        taken &= _corrected(model, steps, residuals, scale, near, k / count)
+        if k < count:
+            monitor, clearance = outs[3:5]
+            taken &= _fold_free(model, monitor) & (clearance[0] >= 0)
+        outs = outs[3 if k == count else 5 :]
+    x, checked = outs[0], outs[1:]
+    taken &= np.max(np.abs(checked[0]), axis=0) < TOLERANCE
+    taken &= _stable(model, checked[1]) & (checked[5][0] >= 0)
+    idx = np.flatnonzero(taken)
+    checks.put(where[idx], [o[:, idx] for o in checked])
+    return tangent, idx, x[:, idx]
+
+
 def _ramp(
     model: RingPairModel,
     params: np.ndarray,
@@ -604,11 +742,23 @@ def _ramp(
     falls = np.zeros(n_cols, int)
     refused = np.zeros(n_cols, bool)  # the current step was refused before
     failure = np.full(n_cols, "", dtype=object)
-    # The tangent at rest: (dr/dx)^-1 = K^-1 there, and r is linear in the load (but for
-    # the rings' mutual torque, which goes with its square), so it is minus the relaxation
-    # direction at full load. The first step is sized so that it predicts a change of state
-    # of at most FIRST_DISPLACEMENT.
-    tangent = -kern.run("relaxation", [x, command, np.ones((1, n_cols))], params)[0]
+    # The first step is sized so that the tangent at rest predicts a change of state of at
+    # most FIRST_DISPLACEMENT; where that step is the whole ramp, it is taken by ``leap``.
+    if max_step >= 1.0 and model.linear_rod:
+        tangent = np.zeros_like(x)
+        left = np.arange(n_cols)
+        for count in range(1, LEAP_STEPS + 1):
+            if left.size == 0:
+                break
+            p = _columns(params, left)
+            t, idx, states = _leap(model, p, command[:, left], scale[:, left], count, checks, left)
+            if count == 1:
+                tangent[:] = t
+            x[:, left[idx]], lam[left[idx]], phase[left[idx]] = states, 1.0, _DONE
+            left = np.delete(left, idx)
+            left = left[_norm(tangent[:, left], scale[:, left]) <= (count + 1) * FIRST_DISPLACEMENT]
+    else:
+        tangent = -kern.run("relaxation", [x, command, np.ones((1, n_cols))], params)[0]
     tangent_prev = np.zeros_like(tangent)
     with np.errstate(divide="ignore", invalid="ignore"):
         h[:] = np.clip(FIRST_DISPLACEMENT / _norm(tangent, scale), MIN_LOAD_STEP, max_step)
@@ -656,7 +806,7 @@ def _ramp(
         phase[too_many] = _FAIL
         failure[too_many] = FAILURES["falls"]
 
-    predict(np.arange(n_cols))
+    predict(np.flatnonzero(phase == _RUN))
     while True:
         a = np.flatnonzero(phase == _RUN)
         if a.size == 0:
