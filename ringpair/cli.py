@@ -20,6 +20,7 @@ from ringpair.commands.effects import effects
 from ringpair.commands.optimize import optimize
 from ringpair.commands.show import show
 from ringpair.commands.simulate import simulate
+from ringpair.commands.steer import steer_command
 from ringpair.commands.study import study
 from ringpair.commands.synth import synth
 from ringpair.commands.workspace import workspace
@@ -40,7 +41,18 @@ def cli() -> None:
 
 
 for _command in (
-    branch, cad, calibrate, diagnose, effects, optimize, show, simulate, study, synth, workspace
+    branch,
+    cad,
+    calibrate,
+    diagnose,
+    effects,
+    optimize,
+    show,
+    simulate,
+    steer_command,
+    study,
+    synth,
+    workspace,
 ):
     cli.add_command(_command)
 

@@ -1,0 +1,285 @@
+"""Steering: the ring angles that put the tip where the user wants it.
+
+The forward map is the state (:func:`design.equilibrium.solve_equilibria`: each
+configuration's stable equilibrium reached by the load ramp) and its tip. Steering
+inverts the tip's lateral position (y, z), base frame, as a function of the two ring
+angles: two angles, two coordinates, so a target inside the workspace has isolated
+solutions, in general more than one (the rings' moments add as two vectors, and the
+same sum is reached with them mirrored about it).
+
+Where the state is a regular stable equilibrium, the tip is a smooth function of the
+angles with the exact derivative of the implicit function theorem,
+d tip / d theta = dP/dtheta - dP/dx (dr/dx)^-1 dr/dtheta (r the model's residual, P its
+pose; :func:`_sensitivity`, compiled from the model's own expressions).
+
+For a batch of targets: the tip is solved on a grid of ring angles (SEED_STEP); every
+local minimum of the distance to the target on that grid (the angles are periodic) seeds
+a Levenberg-Marquardt iteration on the angles (Nocedal & Wright, *Numerical Optimization*,
+2006, sec. 10.3), each trial angle pair solved for its state as every caller solves it.
+Solutions whose angles agree to SAME_ANGLE are one. A solution reaches its target when the
+tip is within REACHED of it; a target that no seed reaches gets the closest point found,
+flagged ``reached = False`` (out of reach, or only reached through a snap).
+
+Each solution carries its state's flags (``snapped``: the ramp to it passed a fold;
+``multistable``: another stable state exists at those angles) and its **fold margin**: the
+smallest real part of an eigenvalue of K^-1 dr/dx, K the unloaded robot's dr/dx (1 for the
+unloaded robot, 0 at a fold, where the robot snaps). SI units throughout (m, rad).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from design.compiled import compile_function
+from design.equilibrium import solve_equilibria
+from design.model import RingPairModel
+from design.registry import index
+from design.workspace import angle_grid
+
+SEED_STEP = np.deg2rad(10.0)
+"""Spacing of the grid of ring angles whose local minima of the distance to a target seed
+the iterations. [rad]"""
+SEEDS = 6
+"""Seeds per target at most (the closest local minima)."""
+REACHED = 1e-9
+"""A target is reached when the tip is this close to it. [m]"""
+SAME_ANGLE = 1e-6
+"""Two solutions are one when both ring angles agree to this. [rad]"""
+MAX_TURN = 0.3
+"""Largest change of a ring angle per iteration (keeps the iteration near its branch).
+[rad]"""
+MAX_ITERATIONS = 80
+"""Levenberg-Marquardt iterations per seed at most."""
+MAX_DAMPING = 1e8
+"""Damping beyond which no step lowers the distance: the closest point is found."""
+
+
+@dataclass(frozen=True)
+class Steering:
+    """Solutions for a batch of targets, one row per (target, distinct solution); a target
+    with none that reaches it has one row, its closest point.
+
+    target_index : shape (R,), the target each row answers.
+    target : shape (R, 2), the target's (y, z), base frame. [m]
+    theta : shape (R, 2), ring angles (distal, proximal) in [0, 2 pi). [rad]
+    position : shape (R, 3), the tip of the state at those angles, base frame. [m]
+    tangent : shape (R, 3), the tip tangent. [-]
+    error : shape (R,), distance from the tip's (y, z) to the target. [m]
+    reached : shape (R,), error <= REACHED.
+    stable, snapped, multistable : shape (R,), the state's flags.
+    fold_margin : shape (R,), smallest real eigenvalue of K^-1 dr/dx (module docstring). [-]
+    """
+
+    target_index: np.ndarray
+    target: np.ndarray
+    theta: np.ndarray
+    position: np.ndarray
+    tangent: np.ndarray
+    error: np.ndarray
+    reached: np.ndarray
+    stable: np.ndarray
+    snapped: np.ndarray
+    multistable: np.ndarray
+    fold_margin: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.target_index)
+
+
+@lru_cache(maxsize=16)
+def _sensitivity(model: RingPairModel) -> ca.Function:
+    """(x, command, params) -> (tip (y, z), d(y, z)/d command (2x2, column-major), dr/dx
+    (column-major)) at an equilibrium x, compiled."""
+    x = ca.SX.sym("x", model.n_unknowns)
+    command = ca.SX.sym("command", 2)
+    prm = ca.SX.sym("params", model.residual.size1_in(2))
+    r = model.residual.call([x, command, prm])[0]
+    tip = model.pose.call([x, command, prm])[0][1:3]
+    dr_dx = ca.jacobian(r, x)
+    d_tip = ca.jacobian(tip, command) - ca.jacobian(tip, x) @ ca.solve(
+        dr_dx, ca.jacobian(r, command)
+    )
+    return compile_function(
+        ca.Function("sensitivity", [x, command, prm], [tip, ca.vec(d_tip), ca.vec(dr_dx)])
+    )
+
+
+def _evaluate(
+    model: RingPairModel, params: np.ndarray, theta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tip (y, z) of the state at each column of theta (2, P) [rad], its derivative
+    (P, 2, 2) and whether it has a state; (NaN where not)."""
+    eq = solve_equilibria(model, params, theta[0], theta[1])
+    tip = np.full((2, theta.shape[1]), np.nan)
+    jac = np.full((theta.shape[1], 2, 2), np.nan)
+    ok = eq.stable.copy()
+    if ok.any():
+        f = _sensitivity(model).map(int(ok.sum()))
+        t, d, _ = f(eq.unknowns[ok].T, theta[:, ok], params)
+        tip[:, ok] = eq.position[ok, 1:].T
+        jac[ok] = np.asarray(d).T.reshape(-1, 2, 2).transpose(0, 2, 1)
+        ok[ok] = np.isfinite(jac[ok]).all(axis=(1, 2))
+    return tip, jac, ok
+
+
+def _seeds(grid_tip: np.ndarray, targets: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Grid indices (i, j) of up to ``count`` local minima of the distance to each target
+    (periodic grid (G, G, 2) of tips, NaN where no state): (target index, flat grid index)."""
+    g = grid_tip.shape[0]
+    rows, cells = [], []
+    for start in range(0, len(targets), 512):
+        t = targets[start : start + 512]
+        d = np.linalg.norm(grid_tip[None] - t[:, None, None, :], axis=-1)
+        d = np.where(np.isfinite(d), d, np.inf)
+        minimum = np.isfinite(d)
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                if di or dj:
+                    minimum &= d <= np.roll(d, (di, dj), axis=(1, 2))
+        flat = np.where(minimum, d, np.inf).reshape(len(t), g * g)
+        best = np.argsort(flat, axis=1)[:, :count]
+        keep = np.isfinite(np.take_along_axis(flat, best, axis=1))
+        rows.append(np.broadcast_to(np.arange(start, start + len(t))[:, None], best.shape)[keep])
+        cells.append(best[keep])
+    return np.concatenate(rows), np.concatenate(cells)
+
+
+def _iterate(
+    model: RingPairModel, params: np.ndarray, target: np.ndarray, theta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Levenberg-Marquardt on the ring angles of each column: (angles (2, P), distance of
+    the tip to the target (P,)). target (2, P) [m], theta (2, P) starts [rad]."""
+    theta = theta.copy()
+    tip, jac, ok = _evaluate(model, params, theta)
+    error = np.where(ok, np.linalg.norm(tip - target, axis=0), np.inf)
+    damping = np.full(theta.shape[1], 1e-3)
+    running = ok.copy()
+    for _ in range(MAX_ITERATIONS):
+        running &= (error > 1e-3 * REACHED) & (damping < MAX_DAMPING)
+        a = np.flatnonzero(running)
+        if a.size == 0:
+            break
+        j, e = jac[a], (tip - target)[:, a].T
+        normal = j.transpose(0, 2, 1) @ j
+        normal += damping[a, None, None] * (
+            np.eye(2) * np.maximum(np.diagonal(normal, axis1=1, axis2=2), 1e-12)[:, :, None]
+        )
+        with np.errstate(invalid="ignore"):
+            step = -np.linalg.solve(normal, (j.transpose(0, 2, 1) @ e[:, :, None]))[:, :, 0]
+        step *= np.minimum(1.0, MAX_TURN / np.maximum(np.abs(step).max(axis=1), 1e-300))[:, None]
+        trial = theta[:, a] + step.T
+        t_tip, t_jac, t_ok = _evaluate(model, params, trial)
+        t_error = np.where(t_ok, np.linalg.norm(t_tip - target[:, a], axis=0), np.inf)
+        better = t_error < error[a]
+        b = a[better]
+        theta[:, b], tip[:, b], jac[b], error[b] = (
+            trial[:, better],
+            t_tip[:, better],
+            t_jac[better],
+            t_error[better],
+        )
+        damping[b] = np.maximum(damping[b] / 5, 1e-12)
+        damping[a[~better]] *= 5
+        # Steps below rounding cannot lower the distance further.
+        running[a[np.abs(step).max(axis=1) < 1e-14]] = False
+    return np.mod(theta, 2 * np.pi), error
+
+
+def _distinct(theta: np.ndarray) -> np.ndarray:
+    """Indices of the first of each group of angle pairs (P, 2) equal to SAME_ANGLE."""
+    keep: list[int] = []
+    for i, t in enumerate(theta):
+        if not any(
+            np.all(np.abs(np.angle(np.exp(1j * (t - theta[k])))) < SAME_ANGLE) for k in keep
+        ):
+            keep.append(i)
+    return np.array(keep, int)
+
+
+def _fold_margin(
+    model: RingPairModel, params: np.ndarray, unknowns: np.ndarray, theta: np.ndarray
+) -> np.ndarray:
+    """Smallest real eigenvalue of K^-1 dr/dx at each state (rows of unknowns (R, n),
+    theta (R, 2)); NaN where there is no state."""
+    out = np.full(len(theta), np.nan)
+    ok = np.isfinite(unknowns).all(axis=1)
+    if not ok.any():
+        return out
+    n, m = model.n_unknowns, int(ok.sum())
+    f = _sensitivity(model).map(m)
+    unloaded = params.copy()
+    unloaded[index("load_scale")] = 0.0
+    rest = np.asarray(model.initial.map(m)(theta[ok].T, unloaded))
+    dr_dx = np.asarray(f(unknowns[ok].T, theta[ok].T, params)[2]).T.reshape(m, n, n)
+    k = np.asarray(f(rest, theta[ok].T, unloaded)[2]).T.reshape(m, n, n)
+    ratio = np.linalg.solve(k.transpose(0, 2, 1), dr_dx.transpose(0, 2, 1))
+    out[ok] = np.linalg.eigvals(ratio).real.min(axis=1)
+    return out
+
+
+def steer(
+    model: RingPairModel,
+    params: np.ndarray,
+    targets: np.ndarray,
+    *,
+    seeds: int = SEEDS,
+    seed_step: float = SEED_STEP,
+) -> Steering:
+    """Every pair of ring angles whose state puts the tip at each target (module
+    docstring).
+
+    targets : shape (M, 2), the tip's (y, z), base frame. [m]
+    params : model parameter vector, shape (k,), from ``model.parameters(design)``. [SI]
+    """
+    params = np.asarray(params, float)
+    targets = np.atleast_2d(np.asarray(targets, float))
+    if targets.shape[1] != 2 or not np.isfinite(targets).all():
+        raise ValueError("targets must be finite (y, z) pairs, shape (M, 2)")
+    angles = angle_grid(seed_step)
+    g1, g2 = np.meshgrid(angles, angles, indexing="ij")
+    grid = solve_equilibria(model, params, g1.ravel(), g2.ravel())
+    grid_tip = np.where(grid.stable[:, None], grid.position[:, 1:], np.nan)
+    owner, cell = _seeds(grid_tip.reshape(len(angles), len(angles), 2), targets, seeds)
+    start = np.vstack([g1.ravel()[cell], g2.ravel()[cell]])
+    theta, error = _iterate(model, params, targets[owner].T, start)
+    rows: list[int] = []
+    answers: list[int] = []
+    for t in range(len(targets)):
+        mine = np.flatnonzero(owner == t)
+        reached = mine[error[mine] <= REACHED]
+        if reached.size:
+            found = list(reached[_distinct(theta[:, reached].T)])
+        elif np.isfinite(error[mine]).any():
+            found = [
+                int(mine[np.nanargmin(np.where(np.isfinite(error[mine]), error[mine], np.nan))])
+            ]
+        else:
+            found = [-1]  # no seed had a state: no answer
+        rows += found
+        answers += [t] * len(found)
+    picked, target_index = np.array(rows, int), np.array(answers, int)
+    has = picked >= 0
+    theta_rows = np.full((len(picked), 2), np.nan)
+    theta_rows[has] = theta[:, picked[has]].T
+    eq = solve_equilibria(model, params, *np.nan_to_num(theta_rows.T), multistable=True)
+    valid = has & eq.stable
+    nan = np.where(valid, 1.0, np.nan)
+    position = eq.position * nan[:, None]
+    err = np.linalg.norm(position[:, 1:] - targets[target_index], axis=1)
+    return Steering(
+        target_index=target_index,
+        target=targets[target_index],
+        theta=theta_rows,
+        position=position,
+        tangent=eq.tangent * nan[:, None],
+        error=err,
+        reached=valid & (err <= REACHED),
+        stable=valid,
+        snapped=valid & eq.snapped,
+        multistable=valid & eq.multistable,
+        fold_margin=_fold_margin(model, params, eq.unknowns * nan[:, None], theta_rows),
+    )
