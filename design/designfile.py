@@ -56,14 +56,19 @@ class Key:
     """Optional key (the project's addition to the spec) when not None; its value in SI."""
 
     def expected(self) -> str:
-        if self.vector:
-            return "an array of three finite numbers"
         lo = (
             "" if self.low is None else (f"> {self.low:g}" if self.low_open else f">= {self.low:g}")
         )
         hi = "" if self.high is None else f"<= {self.high:g}"
         rng = " and ".join(x for x in (lo, hi) if x)
+        if self.vector:
+            return "an array of three finite numbers" + (f", each {rng}" if rng else "")
         return f"a number {rng}".rstrip()
+
+    def admits(self, x: float) -> bool:
+        """Whether the finite number ``x`` lies in the key's range."""
+        too_low = self.low is not None and (x <= self.low if self.low_open else x < self.low)
+        return not (too_low or (self.high is not None and x > self.high))
 
 
 def _sections() -> dict[str, tuple[Key, ...]]:
@@ -99,11 +104,7 @@ def _number(path: str, value: Any, key: Key) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
     x = float(value)
-    if not math.isfinite(x):
-        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
-    too_low = key.low is not None and (x <= key.low if key.low_open else x < key.low)
-    too_high = key.high is not None and x > key.high
-    if too_low or too_high:
+    if not (math.isfinite(x) and key.admits(x)):
         raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
     return x
 
@@ -111,7 +112,7 @@ def _number(path: str, value: Any, key: Key) -> float:
 def _vector(path: str, value: Any, key: Key) -> tuple[float, float, float]:
     ok = isinstance(value, list) and len(value) == 3
     ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-    ok = ok and all(math.isfinite(float(v)) for v in value)
+    ok = ok and all(math.isfinite(float(v)) and key.admits(float(v)) for v in value)
     if not ok:
         raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
     return (float(value[0]), float(value[1]), float(value[2]))

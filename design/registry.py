@@ -182,10 +182,11 @@ _TABLE: list[Parameter] = [
         "external_remanence", "T", "external magnet remanence", "external_magnet.remanence",
         "external_magnet.remanence_t", 0.0, 1.6, tolerance=("rel", 0.02), fit=_REMANENCE_FIT,
     ),
-    # the external magnet is placed to +-1 mm
+    # the external magnet is placed to +-1 mm, within 10 m of the robot
     *_vector(
         "external_center", "m", "external magnet centre", "external_magnet.center",
-        "external_magnet.center_mm", tolerance=("abs", 1 * MM), fit=_PLACEMENT_FIT,
+        "external_magnet.center_mm", low=-10000.0, high=10000.0, tolerance=("abs", 1 * MM),
+        fit=_PLACEMENT_FIT,
     ),
     *_vector(
         "external_magnetization",
@@ -195,9 +196,10 @@ _TABLE: list[Parameter] = [
         "external_magnet.magnetization",
         fit=Fit("linear", -2.0, 2.0, 5.0, 0.01, 0.5),
     ),
+    # a lab, a centrifuge up to ten g
     *_vector(
         "gravity", "m/s^2", "acceleration of gravity", "environment.gravity",
-        "environment.gravity_m_s2",
+        "environment.gravity_m_s2", low=-100.0, high=100.0,
     ),
     *[
         Parameter(
