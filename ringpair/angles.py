@@ -1,4 +1,5 @@
-"""Angle lists on the command line: 'START:STOP:STEP' (inclusive stop), 'a,b,c' or 'a'."""
+"""Angle lists on the command line: 'START:STOP:STEP' (inclusive stop, either direction),
+'a,b,c' or 'a'."""
 
 from __future__ import annotations
 
@@ -6,12 +7,21 @@ import math
 
 import numpy as np
 
+MAX_ANGLES = 1_000_000
+"""Angles one option may list at most (a 0.001 deg grid over 1000 deg)."""
+MAX_ABS_DEG = 36_000.0
+"""Largest commanded angle either way, a hundred turns: beyond it a typing error. [deg]"""
+
 
 def parse_angles(text: str, option: str) -> np.ndarray:
-    """Degrees from a range or list; raises ValueError naming ``option`` on bad input."""
+    """Degrees from a range or list; raises ValueError naming ``option`` on bad input.
+
+    A range runs from START towards STOP in steps of STEP, down as well as up
+    (``60:-60:2`` is 60, 58, ..., -60); a negative STEP must point towards STOP.
+    """
     expected = (
-        f"{option} expects degrees as START:STOP:STEP (e.g. 0:180:12), a comma list "
-        f"(e.g. 0,45,90) or one number"
+        f"{option} expects degrees as START:STOP:STEP (e.g. 0:180:12 or 60:-60:2), a comma "
+        f"list (e.g. 0,45,90) or one number"
     )
     try:
         if ":" in text:
@@ -19,10 +29,7 @@ def parse_angles(text: str, option: str) -> np.ndarray:
             if len(parts) != 3:
                 raise ValueError
             start, stop, step = parts
-            if step <= 0 or stop < start:
-                raise ValueError(f"{expected}; STEP must be > 0 and STOP >= START; got {text!r}")
-            n = int(math.floor((stop - start) / step + 1e-9)) + 1
-            values = start + step * np.arange(n)
+            values = _range(start, stop, step, expected=f"{expected}; got {text!r}", option=option)
         else:
             values = np.array([float(p) for p in text.split(",")])
     except ValueError as exc:
@@ -30,7 +37,28 @@ def parse_angles(text: str, option: str) -> np.ndarray:
             raise
         raise ValueError(f"{expected}; got {text!r}") from None
     if values.size == 0 or not np.all(np.isfinite(values)):
-        raise ValueError(f"{expected}; got {text!r}")
-    if values.size > 1_000_000:
-        raise ValueError(f"{option} gives {values.size} angles; at most 1000000 are allowed")
+        raise ValueError(f"{expected}, all finite; got {text!r}")
+    if np.abs(values).max() > MAX_ABS_DEG:
+        raise ValueError(
+            f"{option} angles must lie within +-{MAX_ABS_DEG:g} deg (a hundred turns); "
+            f"got {text!r}"
+        )
+    if values.size > MAX_ANGLES:
+        raise ValueError(f"{option} gives {values.size} angles; at most {MAX_ANGLES} are allowed")
     return values
+
+
+def _range(start: float, stop: float, step: float, expected: str, option: str) -> np.ndarray:
+    """START, START +- STEP, ... up to STOP inclusive (within 1e-9 of a step). [deg]"""
+    if not all(math.isfinite(x) for x in (start, stop, step)):
+        raise ValueError(f"{expected}: START, STOP and STEP must be finite")
+    if step == 0 or (step < 0 and stop > start):
+        raise ValueError(f"{expected}: STEP must be > 0 (or < 0 with STOP below START)")
+    count = abs(stop - start) / abs(step)
+    if not count < MAX_ANGLES:  # also catches a count that overflows to inf
+        raise ValueError(
+            f"{option} {start:g}:{stop:g}:{step:g} gives {count + 1:.4g} angles; at most "
+            f"{MAX_ANGLES} are allowed"
+        )
+    n = int(math.floor(count + 1e-9)) + 1
+    return start + math.copysign(abs(step), stop - start) * np.arange(n)

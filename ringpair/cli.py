@@ -24,10 +24,25 @@ from ringpair.commands.steer import steer_command
 from ringpair.commands.study import study
 from ringpair.commands.synth import synth
 from ringpair.commands.workspace import workspace
-from ringpair.options import err_console
+from ringpair.options import UserError, err_console, warn
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Commands(click.Group):
+    """The group, with one last net for a file that cannot be read or written found only
+    while a command runs (a full disk, a permission changed meanwhile): one message naming
+    the file, exit 2. The commands check their output paths before any work."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            raise  # the reader went away (``| head``): click ends quietly
+        except OSError as exc:
+            where = f" {exc.filename}" if exc.filename else ""
+            raise UserError(f"cannot use{where}: {exc.strerror or exc}") from None
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="ringpair")
 def cli() -> None:
     """ringpair: design magnetic continuum robots steered by a rotational ring pair.
@@ -59,7 +74,7 @@ for _command in (
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
     """A warning for the user is one line on stderr, not a source location."""
-    err_console.print(f"warning: {message}", markup=False, highlight=False)
+    warn(str(message))
 
 
 def main() -> None:

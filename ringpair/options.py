@@ -1,14 +1,23 @@
 """What the commands share: the consoles, the bad-input error, the arguments and options
-that several commands take (each written once) and the loaders that turn them into a
-design, a model, angles, a study or measured data.
+that several commands take (each written once), the loaders that turn them into a
+design, a model, angles, a study or measured data, the checks of where a command writes
+and of how big a request is, and the progress display.
 
 Bad input raises :class:`UserError`: one message naming the option or file, exit code 2,
-no traceback.
+no traceback, nothing computed or written.
+
+Overwrite policy (:data:`OVERWRITE_POLICY`, in the commands' help): results (CSV, JSON,
+PNG, HTML, CAD files) are replaced on a rerun, each atomically; files that may be inputs
+someone edited (a design file from ``show --save``, measured data in ``synth --out``)
+are replaced only with ``--force``. No command deletes a file it did not write, except
+the temporaries an interrupted run of ringpair left behind.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+import os
+import re
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -17,7 +26,17 @@ import click
 import numpy as np
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    SpinnerColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.text import Text
 
+from design.atomic import remove_stale_temporaries
 from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, parse_effects
 from design.records import Design
@@ -27,16 +46,27 @@ if TYPE_CHECKING:
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.studyfile import Study
 
-# No emoji codes: rich would print an angle range like 0:abc:5 as '0🔤5'.
-console = Console(emoji=False)
-err_console = Console(stderr=True, emoji=False)
+# Text is printed as written: no emoji codes (rich would print an angle range like 0:abc:5
+# as '0🔤5') and no markup (a design named 'a[/]b' or a path with brackets would break it
+# or vanish); colour comes from styles (:func:`warn`, :func:`print_error`).
+console = Console(emoji=False, markup=False)
+err_console = Console(stderr=True, emoji=False, markup=False)
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
 def print_error(message: str) -> None:
-    """``error: message`` on stderr, the message as written (no markup, not wrapped)."""
-    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
+    """``error: message`` on stderr, the message as written (not wrapped)."""
+    err_console.print(
+        Text.assemble(("error:", "bold red"), " ", message), highlight=False, soft_wrap=True
+    )
+
+
+def warn(message: str) -> None:
+    """``warning: message`` on stderr, the message as written."""
+    err_console.print(
+        Text.assemble(("warning:", "yellow"), " ", message), highlight=False, soft_wrap=True
+    )
 
 
 class UserError(click.ClickException):
@@ -104,9 +134,186 @@ def path_option(*names: str, help: str) -> Callable[[F], F]:
     return click.option(*names, type=click.Path(path_type=Path), default=None, help=help)
 
 
-def default_out(*parts: str) -> Path:
-    """Where a command writes when --out is not given: outputs/<parts>."""
-    return Path("outputs", *parts)
+FORCE = click.option(
+    "--force", is_flag=True, help="Replace an existing file that may be someone's input."
+)
+
+OVERWRITE_POLICY = (
+    "Results are replaced on a rerun (each file atomically); a file someone may have "
+    "edited is replaced only with --force."
+)
+
+MAX_CONFIGURATIONS = 1_000_000
+"""Configurations a command solves at most unless --max-configs says more: about five
+minutes with the model for design work and 2 GB for a path (SOLVE_RATE, ROW_BYTES)."""
+SOLVE_RATE = 3_000.0
+"""Configurations solved per second by the model for design work with the search for other
+stable states, on one core of the development machine (2 cores). [1/s]"""
+ROW_BYTES = 7_000
+"""Memory one configuration takes from its solve to its CSV row (measured). [bytes]"""
+ANNOUNCE = 30.0
+"""A run estimated longer than this is announced with its estimate. [s]"""
+
+MAX_CONFIGS = click.option(
+    "--max-configs",
+    type=click.IntRange(1, None),
+    default=MAX_CONFIGURATIONS,
+    show_default=True,
+    help="Refuse to solve more configurations than this, each model compared counting once "
+    "(a guard against typing 0.001 for 1); raise it for a long run.",
+)
+
+
+def slug(name: str) -> str:
+    """``name`` (free text from a design or study file) as one safe folder name: letters,
+    digits, '_', '-' and inner dots; any other run of characters becomes '_', and leading
+    or trailing dots and separators go, so it never climbs out of or above its folder
+    (``../../x`` is ``x``, ``/etc`` is ``etc``); at most 100 bytes. 'unnamed' if nothing
+    is left."""
+    text = re.sub(r"[^\w.-]+", "_", name).strip("._-")
+    while len(text.encode()) > 100:
+        text = text[:-1]
+    return text.rstrip("._-") or "unnamed"
+
+
+def default_out(name: str, *parts: str) -> Path:
+    """Where a command writes when --out is not given: outputs/<slug of name>/<parts>,
+    ``name`` being a design's or a study's (never outside outputs/)."""
+    return Path("outputs", slug(name), *parts)
+
+
+NAME_BYTES = 200
+"""Longest file or folder name an output may have (the file system allows 255 bytes, and
+the temporary beside it adds a few dozen). [bytes]"""
+
+
+def output_path(
+    path: Path,
+    option: str,
+    *,
+    folder: bool,
+    typed: bool = True,
+    replace: bool = True,
+    files: Iterable[str] = (),
+    inputs: Iterable[Path | None] = (),
+) -> Path:
+    """``path``, where a command will write, checked before any work; temporaries that an
+    interrupted run left there are removed.
+
+    folder : whether a folder is wanted (else a file).
+    option : the option naming it, for the message; ``typed`` False when ``path`` is the
+        command's default (the message then says so, rather than blame the option).
+    replace : whether an existing file may be replaced (results); False asks for --force.
+    files : the names the command writes inside the folder (each must not be a folder).
+    inputs : files the command reads; it never writes over one of them.
+
+    Raises UserError (exit 2) for a file where a folder is wanted or the reverse, a path
+    under a file, a place the user cannot write, a file name too long, a file that must
+    not be replaced and an input written over.
+    """
+    kind = "folder" if folder else "file"
+    who = f"{option} {path}" if typed else f"the default output {kind} {path} (set with {option})"
+
+    def fail(problem: str) -> UserError:
+        return UserError(f"{who}: {problem}")
+
+    if "\x00" in str(path):
+        raise fail("contains a NUL character")
+    long = [p for p in path.parts if len(os.fsencode(p)) > NAME_BYTES]
+    if long:
+        raise fail(f"the name {long[0][:40]}... is longer than {NAME_BYTES} bytes")
+    try:
+        if path.is_symlink() and not path.exists():
+            raise fail("is a symbolic link to nothing")
+        if folder and path.exists() and not path.is_dir():
+            raise fail("is a file; expected a folder")
+        targets = [path / f for f in files] if folder else [path]
+        for target in targets:
+            if target.is_dir():
+                where = "" if target == path else f"{target} "
+                raise fail(f"{where}is a folder; expected a file name")
+            if target.exists() and not replace:
+                raise fail("exists; pass --force to replace it")
+            if any(i is not None and target.exists() and _same(target, i) for i in inputs):
+                raise fail("is an input of this command; writing there would destroy it")
+        existing = path if folder else path.parent
+        while not existing.exists() and existing != existing.parent:
+            existing = existing.parent
+        if not existing.is_dir():
+            raise fail(f"{existing} is a file, so nothing can be created under it")
+        if not os.access(existing, os.W_OK | os.X_OK):
+            raise fail(f"cannot write in {existing} (permission denied)")
+        if folder:
+            remove_stale_temporaries(path)
+        else:
+            remove_stale_temporaries(path.parent, path.name)
+    except OSError as exc:
+        raise fail(exc.strerror or str(exc)) from None
+    return path
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return a.samefile(b)
+    except OSError:
+        return False
+
+
+def check_configurations(
+    n: int, limit: int, what: str, *, solves: int = 1, held: bool = True
+) -> None:
+    """Size a request up front: refuse (UserError) ``n`` configurations, each solved
+    ``solves`` times (models compared), above ``limit`` solves, giving the size and an
+    estimate of the time (and of the memory, when all are ``held`` at once); below it,
+    announce a run of more than ANNOUNCE seconds on stderr. ``what`` names the options
+    that asked for them."""
+    total = n * solves
+    seconds = total / SOLVE_RATE
+    if total <= limit:
+        if seconds > ANNOUNCE:
+            err_console.print(f"solving {total:,} configurations: about {duration(seconds)}")
+        return
+    memory = f" and {n * ROW_BYTES / 1e9:.3g} GB of memory" if held else ""
+    raise UserError(
+        f"{what}: {n:,} configurations"
+        + (f" x {solves} models = {total:,} solves" if solves > 1 else "")
+        + f", about {duration(seconds)}{memory}; at most {limit:,} are solved unless "
+        "--max-configs says more"
+    )
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` for people: '40 s', '12 min', '3.5 h', '1,500 days'."""
+    for unit, size in (("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= 2 * size:
+            value = seconds / size
+            return f"{value:,.0f} {unit}" if value >= 10 else f"{value:.1f} {unit}"
+    return f"{seconds:.0f} s"
+
+
+@contextmanager
+def progress(description: str, total: float | None = None) -> Iterator[Callable[..., None]]:
+    """A progress display on stderr (bar, count, elapsed and remaining time) while the
+    block runs, on a terminal (nothing in a pipe or a log); yields ``update(**fields)``,
+    rich's task update: ``advance=n``, ``completed=, total=`` or ``description=``."""
+    columns = (
+        SpinnerColumn(),
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    shown = err_console.is_terminal
+    with Progress(*columns, console=err_console, transient=True, disable=not shown) as bar:
+        task = bar.add_task(escape(description), total=total)
+
+        def update(**fields: Any) -> None:
+            if "description" in fields:
+                fields["description"] = escape(str(fields["description"]))
+            bar.update(task, **fields)
+
+        yield update
 
 
 # Loaders: option values to the objects the commands work on.

@@ -6,12 +6,13 @@ from __future__ import annotations
 import csv
 import io
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from design.atomic import write_text
+from design.atomic import atomic_path, write_text
 from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
 from design.model import RingPairModel, available_effects
@@ -50,13 +51,16 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
     tip_deg = np.rad2deg(eq.tip_angles)
     deflection = np.linalg.norm(eq.position - rest, axis=1) / MM
     for k in range(len(eq)):
-        p, t = eq.position[k] / MM, eq.tangent[k]
+        p = eq.position[k] / MM
+        posed = bool(np.isfinite(p).all())  # a row without a pose never claims a state
+        t = eq.tangent[k] if posed else np.full(3, np.nan)
+        tip = tip_deg[k] if posed else np.full(2, np.nan)
         rows.append(
             {
                 "theta1_deg": float(commanded_deg[k, 0]),
                 "theta2_deg": float(commanded_deg[k, 1]),
-                "theta1_tip_deg": tip_deg[k, 0],
-                "theta2_tip_deg": tip_deg[k, 1],
+                "theta1_tip_deg": tip[0],
+                "theta2_tip_deg": tip[1],
                 "x_mm": p[0],
                 "y_mm": p[1],
                 "z_mm": p[2],
@@ -64,11 +68,11 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
                 "tangent_y": t[1],
                 "tangent_z": t[2],
                 "deflection_mm": deflection[k],
-                "converged": bool(eq.converged[k]),
-                "stable": bool(eq.stable[k]),
+                "converged": bool(eq.converged[k]) and posed,
+                "stable": bool(eq.stable[k]) and posed,
                 "snapped": bool(eq.snapped[k]),
                 "multistable": bool(eq.multistable[k]),
-                "failure": str(eq.failure[k]),
+                "failure": str(eq.failure[k]) or ("" if posed else "no finite pose"),
             }
         )
     return rows
@@ -79,7 +83,22 @@ def write_csv(
 ) -> None:
     """Write rows atomically under ``header`` (as # lines); floats with 9 significant
     digits, NaN as an empty cell, booleans as true/false."""
-    _write(path, [{k: _cell(row[k]) for k in columns} for row in rows], columns, header)
+    with csv_writer(path, columns, header) as put:
+        put(rows)
+
+
+@contextmanager
+def csv_writer(
+    path: str | os.PathLike[str], columns: tuple[str, ...], header: str = ""
+) -> Iterator[Callable[[list[dict]], None]]:
+    """:func:`write_csv` in batches: yields ``put(rows)``, which appends rows; the file
+    appears (atomically) when the block ends, and not at all if it raises."""
+    with atomic_path(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as f:
+        for line in header.splitlines():
+            f.write(f"# {line}\n")
+        writer = csv.DictWriter(f, fieldnames=columns, lineterminator="\n")
+        writer.writeheader()
+        yield lambda rows: writer.writerows({k: _cell(row[k]) for k in columns} for row in rows)
 
 
 def _cell(value: object) -> str:

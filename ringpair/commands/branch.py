@@ -11,6 +11,7 @@ from design.branches import branches
 from design.units import MM
 from ringpair.options import (
     DESIGN,
+    OVERWRITE_POLICY,
     angle_option,
     console,
     default_out,
@@ -18,7 +19,9 @@ from ringpair.options import (
     effects_option,
     model_from,
     one_angle,
+    output_path,
     path_option,
+    progress,
 )
 
 
@@ -34,7 +37,9 @@ from ringpair.options import (
     show_default=True,
     help="Load factors from 0 to 1.",
 )
-@path_option("--out", help="PNG to write. Default: outputs/<design name>/branch.png.")
+@path_option(
+    "--out", help="PNG to write. Default: outputs/<design name>/branch.png. " + OVERWRITE_POLICY
+)
 def branch(
     design: Path | None, theta1: str, theta2: str, effects: str, points: int, out: Path | None
 ) -> None:
@@ -52,9 +57,10 @@ def branch(
     model = model_from(effects)
     command = np.deg2rad([one_angle(theta1, "--theta1"), one_angle(theta2, "--theta2")])
     lam = np.linspace(0.0, 1.0, points)
-    with console.status("following the branches (the first run on a machine compiles)"):
+    typed = out is not None
+    out = output_path(out or default_out(d.name, "branch.png"), "--out", folder=False, typed=typed)
+    with progress("following the branches (the first run on a machine compiles)"):
         path_states, others = branches(model, model.parameters(d), command, lam)
-    out = out or default_out(d.name, "branch.png")
     title = (
         f"{d.name}, {model.name} model, theta1 = {np.rad2deg(command[0]):g} deg, "
         f"theta2 = {np.rad2deg(command[1]):g} deg"

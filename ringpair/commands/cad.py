@@ -7,7 +7,17 @@ from pathlib import Path
 
 import click
 
-from ringpair.options import DESIGN, bad_input, console, default_out, design_from, path_option
+from ringpair.options import (
+    DESIGN,
+    OVERWRITE_POLICY,
+    bad_input,
+    console,
+    default_out,
+    design_from,
+    output_path,
+    path_option,
+    progress,
+)
 
 
 @click.command()
@@ -15,7 +25,7 @@ from ringpair.options import DESIGN, bad_input, console, default_out, design_fro
 @path_option(
     "--out",
     help="Directory for the STEP assembly, STL parts, 3MF plates, check tables and renders. "
-    "Default: outputs/<design name>/cad.",
+    "Default: outputs/<design name>/cad. " + OVERWRITE_POLICY,
 )
 @click.option(
     "--process",
@@ -35,10 +45,11 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
     printability check fails.
     """
     d = design_from(design)
-    from cad import CadError, build_parts  # after the design is read: CAD loads slowly
+    typed = out is not None
+    out = output_path(out or default_out(d.name, "cad"), "--out", folder=True, typed=typed)
+    from cad import CadError, build_parts  # after the inputs are checked: CAD loads slowly
 
-    out = out or default_out(d.name, "cad")
-    with console.status("building, exporting, checking and rendering parts"), bad_input(CadError):
+    with progress("building, exporting, checking and rendering parts"), bad_input(CadError):
         report = build_parts(d, out, process, render=not no_render)
     console.print(report.summary(), highlight=False)
     if not report.passed:

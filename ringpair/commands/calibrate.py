@@ -7,23 +7,26 @@ from pathlib import Path
 
 import click
 import numpy as np
-from rich.markup import escape
 from rich.table import Table
 
 from design.atomic import write_text
 from design.registry import current
 from design.suggest import did_you_mean
+from ringpair.fit_checks import coordinates, fit_warnings, out_of_reach
 from ringpair.options import (
     CSV_DESIGN,
     DATA,
+    OVERWRITE_POLICY,
     UserError,
     bad_input,
     console,
     effects_option,
-    err_console,
     measured_data,
     model_from,
+    output_path,
     path_option,
+    progress,
+    warn,
 )
 
 
@@ -47,7 +50,8 @@ from ringpair.options import (
 @path_option(
     "--json",
     "json_out",
-    help="Also write the estimates, standard errors, correlations and errors as JSON (SI).",
+    help="Also write the estimates, standard errors, correlations and errors as JSON (SI). "
+    + OVERWRITE_POLICY,
 )
 def calibrate(
     data: Path,
@@ -61,7 +65,7 @@ def calibrate(
     """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
     or a CSV, spec/formats.md) by least squares with exact Jacobians; print the estimates
     with their standard errors, and the RMS and largest tip error."""
-    from optimize.fitting.calibrate import FREE_PARAMETERS
+    from optimize.fitting.calibrate import FREE_PARAMETERS, default_free
     from optimize.fitting.calibrate import calibrate as fit_parameters
     from optimize.fitting.likelihood import profile_intervals
 
@@ -78,12 +82,24 @@ def calibrate(
                 f"--free: {n!r} cannot be calibrated{did_you_mean(n, FREE_PARAMETERS)} "
                 f"(expected names from {', '.join(FREE_PARAMETERS)})"
             )
+    if json_out is not None:
+        output_path(json_out, "--json", folder=False, inputs=[data, design_path])
+    freed = names or default_free(model.effects)
+    if coordinates(m) < len(freed) and not priors:
+        raise UserError(
+            f"{m.source}: {len(m)} row(s) give {coordinates(m)} measured number(s), fewer than "
+            f"the {len(freed)} parameters to fit ({', '.join(freed)}); measure more "
+            "configurations" + (" or free fewer" if free is not None else "")
+        )
+    warnings = out_of_reach(d, m)
+    for w in warnings:
+        warn(w)
     fitting = "fitting (the first run on a machine compiles the model)"
-    with console.status(fitting), bad_input(ValueError):
+    with progress(fitting), bad_input(ValueError, prefix=f"{m.source}: "):
         res = fit_parameters(d, m, model.effects, names, priors=priors)
     intervals = {}
     if profile:
-        with console.status("profile likelihood"):
+        with progress("profile likelihood"):
             intervals = profile_intervals(d, m, res, res.names)
     table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {len(m)} rows")
     columns = ["parameter", "nominal", "estimate", "std. error"]
@@ -104,13 +120,15 @@ def calibrate(
     console.print(
         f"tip error: RMS {res.rmse_mm:.3f} mm, largest {res.max_abs_mm:.3f} mm; implied noise "
         f"{res.noise_mm:.3f} mm per coordinate; "
-        + ("converged" if res.converged else "[yellow]NOT converged[/]")
+        + ("converged" if res.converged else "NOT converged")
         + f" ({res.evaluations} solves, {res.time_s:.2f} s)"
     )
     if res.at_bounds:
-        err_console.print(f"[yellow]warning:[/] at a bound: {', '.join(res.at_bounds)}")
-    if "determine only" in res.message:
-        err_console.print(f"[yellow]warning:[/] {escape(res.message)}")
+        warn(f"at a bound: {', '.join(res.at_bounds)}")
+    later = fit_warnings(d, m, res)
+    for w in later:
+        warn(w)
+    warnings += later
     if json_out is not None:
 
         def finite(x: float) -> float | None:
@@ -134,6 +152,7 @@ def calibrate(
             "noise_mm": res.noise_mm,
             "converged": res.converged,
             "message": res.message,
+            "warnings": warnings,
         }
         write_text(json_out, json.dumps(doc, indent=2) + "\n")
         console.print(f"wrote {json_out}")

@@ -3,23 +3,65 @@
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
-from rich.markup import escape
+import numpy as np
+from click.core import ParameterSource
 from rich.table import Table
 
 from design.atomic import write_text
-from ringpair.options import CSV_DESIGN, DATA, UserError, console, measured_data, path_option
+from ringpair.fit_checks import coordinates, fit_warnings, misses, out_of_reach
+from ringpair.options import (
+    CSV_DESIGN,
+    DATA,
+    OVERWRITE_POLICY,
+    UserError,
+    bad_input,
+    console,
+    duration,
+    err_console,
+    measured_data,
+    output_path,
+    path_option,
+    progress,
+    warn,
+)
+
+MAX_ROWS = 20_000
+"""Rows diagnosed at most unless --max-rows says more (about seven minutes)."""
+SECONDS = (13.0, 0.02)
+"""Time of a diagnosis, measured on the development machine (2 cores): a fixed part and
+a part per row. [s, s/row]"""
+ANNOUNCE = 30.0
+"""A diagnosis estimated longer than this is announced with its estimate. [s]"""
+if TYPE_CHECKING:
+    from optimize.fitting.measurements import Measurements
+
+REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
+"""What --report writes in its folder."""
 
 
 @click.command()
 @DATA
 @CSV_DESIGN
-@path_option("--json", "json_out", help="Write the diagnosis JSON (spec/formats.md) here.")
+@path_option(
+    "--json",
+    "json_out",
+    help="Write the diagnosis JSON (spec/formats.md) here. " + OVERWRITE_POLICY,
+)
 @path_option("--report", help="Directory for residual plots before/after and diagnosis.html.")
 @click.option("--folds", default=5, show_default=True, help="Cross-validation folds.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the fold assignment.")
+@click.option(
+    "--max-rows",
+    type=click.IntRange(1, None),
+    default=MAX_ROWS,
+    show_default=True,
+    help="Refuse data with more rows than this (the time is estimated up front).",
+)
 def diagnose(
     data: Path,
     design_path: Path | None,
@@ -27,40 +69,110 @@ def diagnose(
     report: Path | None,
     folds: int,
     seed: int,
+    max_rows: int,
 ) -> None:
     """What the simulation gets wrong on measured DATA, the physical cause, and the gain.
 
     DATA is a data-set folder (design.toml + measurements.csv) or a CSV with --design.
     Calibrates the paper's baseline, looks for structure in its residuals, adds the model
     effects the data call for (judged by BIC and cross-validated error) and prints the
-    causes with their evidence and the fitted physical parameters.
+    causes with their evidence and the fitted physical parameters. Each stage is printed
+    on stderr as it starts, with the time so far.
     """
     from optimize.fitting.diagnose import diagnose as run_diagnosis
     from ringpair.diagnosis_report import write_report
 
     d, m = measured_data(data, design_path)
-    if not 2 <= folds <= len(m):
-        raise UserError(f"--folds must be between 2 and the number of rows ({len(m)}); got {folds}")
-    with console.status("diagnosing") as status:
-        result = run_diagnosis(d, m, k=folds, seed=seed, progress=status.update)
-    doc = result.to_json()
+    seconds = SECONDS[0] + SECONDS[1] * len(m)
+    if len(m) > max_rows:
+        raise UserError(
+            f"{m.source} has {len(m):,} rows: a diagnosis would take about {duration(seconds)}; "
+            f"at most {max_rows:,} are diagnosed unless --max-rows says more"
+        )
+    _check_size(m, folds, typed=_typed("folds"), seed=seed)
+    inputs = [data, design_path]
+    if json_out is not None:
+        output_path(json_out, "--json", folder=False, inputs=inputs)
+    if report is not None:
+        j, r = json_out and json_out.resolve(), report.resolve()
+        if j is not None and (j == r or j in r.parents):
+            raise UserError(f"--report {report}: a folder where --json writes its file")
+        output_path(report, "--report", folder=True, files=REPORT_FILES, inputs=inputs)
+    notes = out_of_reach(d, m)
+    for note in notes:
+        warn(note)
+    if seconds > ANNOUNCE:
+        err_console.print(f"diagnosing {len(m):,} rows: about {duration(seconds)}")
+    t0 = time.perf_counter()
+    with progress("diagnosing") as update, bad_input(ValueError, prefix=f"{m.source}: "):
+
+        def say(stage: str) -> None:
+            update(description=stage)
+            err_console.print(f"{time.perf_counter() - t0:6.1f} s {stage}", style="dim")
+
+        result = run_diagnosis(d, m, k=folds, seed=seed, progress=say)
+    missed = misses(d, m, result.final.calibration)
+    later = fit_warnings(d, m, result.final.calibration)
+    doc = {**result.to_json(), "warnings": notes + later}
     table = Table(title=f"diagnosis of {m.source} ({len(m)} rows, {result.time_s:.1f} s)")
     for col in ("model", "RMSE (mm)", "max (mm)", "cross-validated RMSE (mm)"):
         table.add_column(col, justify="right")
-    for name, fit in (("baseline", result.baseline), (result.final.name, result.final)):
+    fits = [("baseline", result.baseline)]
+    if result.final is not result.baseline:
+        fits.append((result.final.name, result.final))
+    for name, fit in fits:
         c = fit.calibration
         table.add_row(name, f"{c.rmse_mm:.3f}", f"{c.max_abs_mm:.3f}", f"{fit.cv_rmse_mm:.3f}")
     console.print(table)
-    if result.causes:
-        for cause in result.causes:
-            console.print(f"[bold]cause[/] {escape(cause.evidence)}")
-    else:
-        console.print("causes: [] (the calibrated baseline explains the data)")
+    for cause in result.causes:
+        console.print(f"cause {cause.evidence}")
+    if not result.causes:
+        console.print(
+            "causes: [] (the model does not explain the data either: see the warning)"
+            if missed
+            else "causes: [] (the calibrated baseline explains the data)"
+        )
     if result.unexplained:
-        console.print(f"[yellow]not explained:[/] {escape(result.unexplained)}")
+        console.print(f"not explained: {result.unexplained}")
+    for note in later:
+        warn(note)
     if json_out is not None:
         write_text(json_out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
         console.print(f"wrote {json_out}")
     if report is not None:
         for path in write_report(result, m, report):
             console.print(f"wrote {path}")
+
+
+def _typed(option: str) -> bool:
+    """Whether the user gave ``option`` (rather than its default)."""
+    return click.get_current_context().get_parameter_source(option) != ParameterSource.DEFAULT
+
+
+def _check_size(m: Measurements, folds: int, *, typed: bool, seed: int) -> None:
+    """Refuse data too small to diagnose with ``folds``-fold cross-validation: fewer
+    distinct configurations than folds, or a training fold with fewer measured numbers
+    than the largest model's parameters. The message blames --folds only when ``typed``."""
+    from design.model import EFFECTS
+    from optimize.fitting.calibrate import configuration_folds, default_free
+    if folds < 2:
+        raise UserError(f"--folds must be at least 2; got {folds}")
+    configurations = len(np.unique(np.round(m.command, 12), axis=0))
+    if configurations < folds:
+        raise UserError(
+            f"--folds {folds} needs at least {folds} distinct configurations; {m.source} has "
+            f"{configurations}"
+            if typed
+            else f"{m.source}: {len(m)} row(s) with {configurations} distinct "
+            f"configuration(s) are too few to diagnose: the cross-validation needs at least "
+            f"{folds}"
+        )
+    needed = len(default_free(EFFECTS))
+    fold = configuration_folds(m, folds, seed)
+    trained = min(coordinates(m.subset(fold != f)) for f in range(folds))
+    if trained < needed:
+        raise UserError(
+            f"{m.source}: too few measurements to diagnose: a cross-validation fold trains "
+            f"on {trained} measured numbers, fewer than the {needed} parameters of the "
+            "largest model; measure more configurations"
+        )

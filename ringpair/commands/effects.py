@@ -8,14 +8,20 @@ import click
 import numpy as np
 from rich.table import Table
 
+from design.model import available_effects
 from ringpair.options import (
     DESIGN,
+    MAX_CONFIGS,
+    OVERWRITE_POLICY,
     angle_option,
     angles,
+    check_configurations,
     console,
     default_out,
     design_from,
+    output_path,
     path_option,
+    progress,
 )
 from ringpair.tables import effect_shifts, write_csv
 
@@ -28,8 +34,14 @@ from ringpair.tables import effect_shifts, write_csv
     "Distal ring angles [deg] driven in order (the paper's planar experiment).",
 )
 @angle_option("--theta2", "0", "Proximal ring angles [deg].")
-@path_option("--out", help="CSV of the comparison. Default: outputs/<design name>/effects.csv.")
-def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> None:
+@path_option(
+    "--out",
+    help="CSV of the comparison. Default: outputs/<design name>/effects.csv. " + OVERWRITE_POLICY,
+)
+@MAX_CONFIGS
+def effects(
+    design: Path | None, theta1: str, theta2: str, out: Path | None, max_configs: int
+) -> None:
     """How far each model effect moves the tip of DESIGN, against the paper's baseline.
 
     Drives the rings through every (theta1, theta2) in order (theta2 fastest) with the
@@ -39,7 +51,11 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
     d = design_from(design)
     t1 = np.deg2rad(angles(theta1, "--theta1"))
     t2 = np.deg2rad(angles(theta2, "--theta2"))
-    with console.status("comparing model effects (first use compiles each model)"):
+    models = len(available_effects()) + 2  # the baseline, each effect, all of them
+    check_configurations(t1.size * t2.size, max_configs, "--theta1 and --theta2", solves=models)
+    typed = out is not None
+    out = output_path(out or default_out(d.name, "effects.csv"), "--out", folder=False, typed=typed)
+    with progress("comparing model effects (first use compiles each model)"):
         rows, base_max = effect_shifts(d, t1, t2)
     table = Table(
         title=f"'{d.name}': tip shift of each effect against the baseline "
@@ -64,6 +80,5 @@ def effects(design: Path | None, theta1: str, theta2: str, out: Path | None) -> 
             str(r["snaps"]),
         )
     console.print(table)
-    out = out or default_out(d.name, "effects.csv")
     write_csv(out, rows, tuple(rows[0]), header=f"ringpair effects, design '{d.name}'")
     console.print(f"wrote {out}")

@@ -16,12 +16,15 @@ from design.model import RingPairModel
 from design.units import MM
 from design.workspace import Workspace, sweep_workspace
 from ringpair.options import (
+    OVERWRITE_POLICY,
     SCHEDULER,
     STUDY,
     UserError,
     console,
     default_out,
+    output_path,
     path_option,
+    progress,
     study_from,
 )
 from ringpair.tables import pareto_rows, write_rows
@@ -32,9 +35,15 @@ if TYPE_CHECKING:
     from optimize.sizing.studyfile import Study
 
 
+FILES = ("best_design.toml", "workspace.png", "pareto.png", "summary.json")
+"""What ``optimize`` writes in its folder (and pareto_<quantity>.csv, points/)."""
+
+
 @click.command()
 @STUDY
-@path_option("--out", help="Output directory. Default: outputs/<study name>/optimize.")
+@path_option(
+    "--out", help="Output directory. Default: outputs/<study name>/optimize. " + OVERWRITE_POLICY
+)
 @SCHEDULER
 @click.option(
     "--workers", default=2, show_default=True, help="Local Dask workers (without --scheduler)."
@@ -56,13 +65,18 @@ def optimize(
     study = study_from(study_path)
     if workers < 1:
         raise UserError(f"--workers must be at least 1; got {workers}")
-    out = out or default_out(study.name, "optimize")
-    out.mkdir(parents=True, exist_ok=True)
-    with console.status(f"solving '{study.name}' ({study.starts} starts per material)"):
+    out = output_path(
+        out or default_out(study.name, "optimize"),
+        "--out",
+        folder=True,
+        typed=out is not None,
+        files=FILES,
+    )
+    with progress(f"solving '{study.name}' ({study.starts} starts per material)"):
         best = optimize_design(study)
     console.print(best.report())
     model = RingPairModel(study.effects)
-    with console.status("forward simulation of the starting and the best design"):
+    with progress("forward simulation of the starting and the best design"):
         start_ws = sweep_workspace(study.base, model=model)
         end_ws = sweep_workspace(best.design, model=model) if best.design is not None else None
     written = []
@@ -97,21 +111,12 @@ def optimize(
 
 def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) -> ParetoResult:
     """The study's Pareto sweeps on Dask, with a progress bar."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
     from optimize.sizing.pareto import run_sweeps
 
-    with Progress(
-        "[progress.description]{task.description}",
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=console,
-    ) as bar:
-        task = bar.add_task("Pareto points", total=None)
+    with progress("Pareto points") as update:
 
         def step(done: int, n: int) -> None:
-            bar.update(task, completed=done, total=n)
+            update(completed=done, total=n)
 
         return run_sweeps(study, out, scheduler=scheduler, workers=workers, progress=step)
 

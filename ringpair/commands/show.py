@@ -11,18 +11,22 @@ from design.designfile import save_design
 from design.magnets import cylinder_moment, ring_moment
 from design.sections import bending_rigidity, tube_torsional_rigidity
 from design.units import MM
-from ringpair.options import DESIGN, console, design_from, path_option
+from ringpair.options import DESIGN, FORCE, console, design_from, output_path, path_option
 
 
 @click.command()
 @DESIGN
 @path_option(
     "--save",
-    help="Also write the (validated) design to this TOML file, e.g. to start a new one.",
+    help="Also write the (validated) design to this TOML file, e.g. to start a new one. "
+    "An existing file is replaced only with --force.",
 )
-def show(design: Path | None, save: Path | None) -> None:
+@FORCE
+def show(design: Path | None, save: Path | None, force: bool) -> None:
     """Validate DESIGN and print it with its derived quantities."""
     d = design_from(design)
+    if save is not None:
+        output_path(save, "--save", folder=False, replace=force)
     t, r, e = d.tip, d.robot, d.external_magnet
     table = Table(title=f"design '{d.name}'", show_header=True)
     table.add_column("quantity")

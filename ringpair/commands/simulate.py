@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections import deque
 from pathlib import Path
 
 import click
@@ -12,20 +13,28 @@ from design.equilibrium import solve_design
 from design.geometry import rest_position
 from ringpair.options import (
     DESIGN,
+    MAX_CONFIGS,
+    OVERWRITE_POLICY,
     angle_option,
     angles,
+    check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
-    err_console,
     model_from,
+    output_path,
     path_option,
+    progress,
+    warn,
 )
-from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
+from ringpair.tables import POSE_COLUMNS, csv_writer, pose_rows
 
 SHOWN = 60
 """Rows printed at most: the first and last half of them."""
+CHUNK = 4096
+"""Configurations solved in one call when each is on its own (a progress step, and the
+memory bound: rows go to the CSV chunk by chunk)."""
 
 
 @click.command()
@@ -41,7 +50,10 @@ SHOWN = 60
     "Proximal ring (catheter) angles [deg], same forms. Every pair of the two "
     "lists is simulated.",
 )
-@path_option("--out", help="CSV to write. Default: outputs/<design name>/simulate.csv.")
+@path_option(
+    "--out",
+    help="CSV to write. Default: outputs/<design name>/simulate.csv. " + OVERWRITE_POLICY,
+)
 @effects_option("default")
 @click.option(
     "--ordered",
@@ -57,6 +69,7 @@ SHOWN = 60
     help="Skip the search for other stable states at each command (faster).",
 )
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
+@MAX_CONFIGS
 def simulate(
     design: Path | None,
     theta1: str,
@@ -66,6 +79,7 @@ def simulate(
     ordered: bool,
     no_multistable: bool,
     quiet: bool,
+    max_configs: int,
 ) -> None:
     """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
 
@@ -81,36 +95,57 @@ def simulate(
     model = model_from(effects)
     t1 = angles(theta1, "--theta1")
     t2 = angles(theta2, "--theta2")
-    g1, g2 = np.meshgrid(t1, t2, indexing="ij")
-    commanded = np.column_stack([g1.ravel(), g2.ravel()])
-    with console.status("solving equilibria (the first run on a machine compiles the model)"):
-        eq = solve_design(
-            d,
-            np.deg2rad(commanded[:, 0]),
-            np.deg2rad(commanded[:, 1]),
-            model,
-            ordered,
-            multistable=not (ordered or no_multistable),
-        )
-    rest = rest_position(d.robot.free_length)
-    rows = pose_rows(eq, rest)
-    out = out or default_out(d.name, "simulate.csv")
-    write_csv(
-        out, rows, POSE_COLUMNS, header=f"ringpair simulate, design '{d.name}', model {model.name}"
+    n = t1.size * t2.size
+    check_configurations(n, max_configs, "--theta1 and --theta2", held=ordered)
+    out = output_path(
+        out or default_out(d.name, "simulate.csv"),
+        "--out",
+        folder=False,
+        typed=out is not None,
+        inputs=[design],
     )
+    g1, g2 = np.meshgrid(np.deg2rad(t1), np.deg2rad(t2), indexing="ij")
+    commanded = np.column_stack([g1.ravel(), g2.ravel()])
+    rest = rest_position(d.robot.free_length)
+    step = n if ordered else CHUNK  # a path is solved in one go, from state to state
+    head: list[dict] = []
+    tail: deque[dict] = deque(maxlen=SHOWN // 2)
+    failures: dict[str, int] = {}
+    header = f"ringpair simulate, design '{d.name}', model {model.name}"
+    solving = "solving equilibria (the first run on a machine compiles the model)"
+    with progress(solving, total=n) as update, csv_writer(out, POSE_COLUMNS, header) as put:
+        for start in range(0, n, step):
+            chunk = commanded[start : start + step]
+            eq = solve_design(
+                d,
+                chunk[:, 0],
+                chunk[:, 1],
+                model,
+                ordered,
+                multistable=not (ordered or no_multistable),
+            )
+            rows = pose_rows(eq, rest)
+            put(rows)
+            head += rows[: SHOWN - len(head)]
+            tail.extend(rows)
+            for row in rows:
+                if not row["converged"]:
+                    failures[row["failure"]] = failures.get(row["failure"], 0) + 1
+            update(advance=len(rows))
     if not quiet:
-        _print_rows(rows, f"{d.name}: tip poses ({model.name} model)")
-    n_bad = int(np.count_nonzero(~eq.converged))
-    if n_bad:
-        reasons = sorted(set(eq.failure[~eq.converged]))
-        err_console.print(
-            f"[yellow]warning:[/] {n_bad} configuration(s) have no state: " + "; ".join(reasons)
+        shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
+        _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)")
+    if failures:
+        warn(
+            f"{sum(failures.values())} configuration(s) have no state: "
+            + "; ".join(sorted(failures))
         )
-    console.print(f"wrote {out} ({len(rows)} configurations)")
+    console.print(f"wrote {out} ({n} configurations)")
 
 
-def _print_rows(rows: list[dict], title: str) -> None:
-    """The poses as a table (at most SHOWN rows), with each row's state."""
+def _print_rows(shown: list[dict], n: int, title: str) -> None:
+    """The poses as a table (the ``shown`` rows, at most SHOWN of ``n``), with each row's
+    state."""
     table = Table(title=title)
     for col in (
         "theta1 [deg]",
@@ -122,8 +157,6 @@ def _print_rows(rows: list[dict], title: str) -> None:
         "state",
     ):
         table.add_column(col, justify="right")
-    half = SHOWN // 2
-    shown = rows if len(rows) <= SHOWN else rows[:half] + rows[-half:]
     for row in shown:
         flags = ["snapped"] * row["snapped"] + ["multistable"] * row["multistable"]
         state = ", ".join(["stable", *flags]) if row["stable"] else "NO STATE"
@@ -135,5 +168,5 @@ def _print_rows(rows: list[dict], title: str) -> None:
             state,
         )
     console.print(table)
-    if len(rows) > SHOWN:
-        console.print(f"({len(rows) - SHOWN} rows not shown)")
+    if n > len(shown):
+        console.print(f"({n - len(shown)} rows not shown)")

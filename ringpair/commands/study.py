@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 
 from ringpair.options import (
+    OVERWRITE_POLICY,
     SCHEDULER,
     STUDY,
     UserError,
@@ -17,22 +18,33 @@ from ringpair.options import (
     console,
     default_out,
     err_console,
+    output_path,
     path_option,
     print_error,
+    progress,
     study_from,
 )
+
+FILES = ("report.html", "results.json", "manifest.json")
+"""What ``study`` writes in its folder besides each stage's files."""
 
 
 @click.command()
 @STUDY
-@path_option("--out", help="Output directory. Default: outputs/<study name>.")
+@path_option("--out", help="Output directory. Default: outputs/<study name>. " + OVERWRITE_POLICY)
 @path_option(
     "--data",
     help="Measured data set (folder with design.toml and measurements.csv) to diagnose.",
 )
 @click.option("--samples", default=200, show_default=True, help="Tolerance Monte Carlo samples.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the Monte Carlo.")
-@click.option("--workers", default=2, show_default=True, help="Local Dask workers.")
+@click.option(
+    "--workers",
+    type=click.IntRange(1, None),
+    default=2,
+    show_default=True,
+    help="Local Dask workers.",
+)
 @SCHEDULER
 @click.option("--no-render", is_flag=True, help="Skip the part renders (faster).")
 def study(
@@ -63,15 +75,17 @@ def study(
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
     if samples < 2:
         raise UserError(f"--samples must be at least 2; got {samples}")
-    out = out or default_out(s.name)
+    out = output_path(
+        out or default_out(s.name), "--out", folder=True, typed=out is not None, files=FILES
+    )
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     try:
-        with console.status("starting") as status:
+        with progress("starting") as update:
 
             def say(stage: str) -> None:
-                status.update(f"{stage} ({time.perf_counter() - t0:.0f} s)")
-                console.print(f"[dim]{time.perf_counter() - t0:6.1f} s[/] {stage}")
+                update(description=stage)
+                console.print(f"{time.perf_counter() - t0:6.1f} s {stage}")
 
             run = run_study(
                 s,

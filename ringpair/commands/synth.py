@@ -14,14 +14,17 @@ from design.suggest import did_you_mean
 from design.units import MM
 from ringpair.options import (
     DESIGN,
+    FORCE,
     UserError,
     console,
     default_out,
     design_from,
     effects_option,
-    err_console,
     model_from,
+    output_path,
     path_option,
+    progress,
+    warn,
 )
 
 
@@ -46,8 +49,39 @@ def _overrides(items: tuple[str, ...]) -> dict[str, float]:
             ) from None
         if not np.isfinite(value):
             raise UserError(f"--set {name} expects a finite number [{unit}]; got {text.strip()!r}")
+        low, high, low_open = _plausible(name)
+        too_low = low is not None and (value <= low if low_open else value < low)
+        if too_low or (high is not None and value > high):
+            bounds = [f"{'>' if low_open else '>='} {low:g}"] * (low is not None)
+            bounds += [f"<= {high:g}"] * (high is not None)
+            raise UserError(
+                f"--set {name} must be {' and '.join(bounds)} [{unit}]; got {text.strip()!r}"
+            )
         out[name] = value * size
     return out
+
+
+def _plausible(name: str) -> tuple[float | None, float | None, bool]:
+    """The range --set admits for ``name`` in its file unit: the design file's, or for a
+    model factor its calibration range (low, high, whether low is excluded)."""
+    p = PARAMETERS[name]
+    if p.low is not None or p.high is not None:
+        return p.low, p.high, p.low_open
+    if p.fit is not None:
+        size = file_unit(name)[1]
+        return p.fit.lower / size, p.fit.upper / size, False
+    return None, None, False
+
+
+def _measured_elsewhere(path: Path) -> bool:
+    """Whether ``path`` is a file whose first line is not synth's provenance comment."""
+    if not path.is_file():
+        return False
+    try:
+        with path.open(encoding="utf-8", errors="replace") as f:
+            return not f.readline().startswith("# ringpair synth")
+    except OSError:
+        return True
 
 
 @click.command()
@@ -64,7 +98,8 @@ def _overrides(items: tuple[str, ...]) -> dict[str, float]:
 @path_option(
     "--out",
     help="Data-set folder to write (design.toml + measurements.csv). "
-    "Default: outputs/<design name>/synth.",
+    "Default: outputs/<design name>/synth. Measured data that synth did not write there "
+    "are replaced only with --force.",
 )
 @click.option(
     "--view",
@@ -92,6 +127,7 @@ def _overrides(items: tuple[str, ...]) -> dict[str, float]:
     "angles in deg, moduli in MPa, masses in g. design.toml keeps the nominal values.",
 )
 @click.option("--tip-angles", is_flag=True, help="Also record the ring angles at the tip.")
+@FORCE
 def synth(
     design: Path | None,
     effects: str,
@@ -102,6 +138,7 @@ def synth(
     n_points: int,
     settings: tuple[str, ...],
     tip_angles: bool,
+    force: bool,
 ) -> None:
     """Synthetic bench data of DESIGN: a data set (spec/formats.md) to test calibration
     and diagnosis on.
@@ -117,10 +154,22 @@ def synth(
     d = design_from(design)
     model = model_from(effects)
     truth = _overrides(settings)
-    out = out or default_out(d.name, "synth")
-    if out.exists() and not out.is_dir():
-        raise UserError(f"--out {out} exists and is not a folder; expected a data-set folder")
-    with console.status("simulating the bench run (the first run on a machine compiles the model)"):
+    typed = out is not None
+    out = output_path(
+        out or default_out(d.name, "synth"),
+        "--out",
+        folder=True,
+        typed=typed,
+        files=("design.toml", "measurements.csv"),
+        inputs=[design],
+    )
+    if not force and _measured_elsewhere(out / "measurements.csv"):
+        where = f"--out {out}" if typed else f"the default output folder {out}"
+        raise UserError(
+            f"{where}: holds measurements.csv that ringpair synth did not write (measured "
+            "data?); pass --force to replace it"
+        )
+    with progress("simulating the bench run (the first run on a machine compiles the model)"):
         data = synthesize_data(
             d,
             model.effects,
@@ -158,8 +207,5 @@ def synth(
         table.add_row(f"true {k}", f"{v / size:g} {unit if unit != '-' else ''}".rstrip())
     console.print(table)
     if data.dropped:
-        err_console.print(
-            f"[yellow]warning:[/] {data.dropped} configuration(s) without a stable equilibrium "
-            "were dropped"
-        )
+        warn(f"{data.dropped} configuration(s) without a stable equilibrium were dropped")
     console.print(f"wrote {out}/: design.toml, measurements.csv")

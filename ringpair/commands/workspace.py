@@ -13,17 +13,27 @@ from design.atomic import write_text
 from design.equilibrium import solve_design
 from design.records import Design
 from design.units import MM
-from design.workspace import Workspace, sweep_workspace
+from design.workspace import Workspace, angle_grid, sweep_workspace
 from ringpair.options import (
     DESIGN,
+    MAX_CONFIGS,
+    OVERWRITE_POLICY,
+    check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
     model_from,
+    output_path,
     path_option,
+    progress,
 )
 from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
+
+FILES = (
+    "workspace.csv", "summary.json", "top.png", "side.png", "section.png", "deflection.png"
+)
+"""What ``workspace`` writes in its folder."""
 
 
 @click.command()
@@ -31,7 +41,7 @@ from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
 @path_option(
     "--out",
     help="Directory for workspace.csv, summary.json and the PNG plots. "
-    "Default: outputs/<design name>/workspace.",
+    "Default: outputs/<design name>/workspace. " + OVERWRITE_POLICY,
 )
 @click.option(
     "--step",
@@ -41,7 +51,10 @@ from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
     help="Grid spacing of theta1 and theta2 over a full turn [deg].",
 )
 @effects_option("default")
-def workspace(design: Path | None, out: Path | None, step: float, effects: str) -> None:
+@MAX_CONFIGS
+def workspace(
+    design: Path | None, out: Path | None, step: float, effects: str, max_configs: int
+) -> None:
     """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
 
     Prints the deflection range along y and z, the largest deflection and its direction,
@@ -54,8 +67,15 @@ def workspace(design: Path | None, out: Path | None, step: float, effects: str) 
 
     d = design_from(design)
     model = model_from(effects)
-    out = out or default_out(d.name, "workspace")
-    with console.status("sweeping the workspace"):
+    check_configurations(len(angle_grid(np.deg2rad(step))) ** 2, max_configs, "--step")
+    out = output_path(
+        out or default_out(d.name, "workspace"),
+        "--out",
+        folder=True,
+        typed=out is not None,
+        files=FILES,
+    )
+    with progress("sweeping the workspace"):
         ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)

@@ -28,7 +28,7 @@ def test_bad_design_exits_2_with_one_message(tmp_path, demonstrator_doc, key, va
 
 @pytest.mark.parametrize(
     ("option", "value"),
-    [("--theta1", "0:abc:5"), ("--theta2", "5:0:1"), ("--theta1", "0:10:0"), ("--theta1", "")],
+    [("--theta1", "0:abc:5"), ("--theta2", "0:5:-1"), ("--theta1", "0:10:0"), ("--theta1", "")],
 )
 def test_bad_angles_exit_2_naming_the_option(option, value):
     result = CliRunner().invoke(cli, ["simulate", option, value])
