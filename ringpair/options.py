@@ -134,6 +134,17 @@ def path_option(*names: str, help: str) -> Callable[[F], F]:
     return click.option(*names, type=click.Path(path_type=Path), default=None, help=help)
 
 
+class FloatRange(click.FloatRange):
+    """click's FloatRange without NaN, which it lets through (no comparison with NaN is
+    true)."""
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        number = super().convert(value, param, ctx)
+        if np.isnan(number):
+            self.fail(f"{value!r} is not a number in {self._describe_range()}", param, ctx)
+        return number
+
+
 FORCE = click.option(
     "--force", is_flag=True, help="Replace an existing file that may be someone's input."
 )
@@ -288,7 +299,7 @@ def duration(seconds: float) -> str:
         if seconds >= 2 * size:
             value = seconds / size
             return f"{value:,.0f} {unit}" if value >= 10 else f"{value:.1f} {unit}"
-    return f"{seconds:.0f} s"
+    return f"{seconds:.0f} s" if seconds >= 1 else "under a second"
 
 
 @contextmanager

@@ -15,6 +15,7 @@ from design.units import MM
 from ringpair.options import (
     DESIGN,
     FORCE,
+    FloatRange,
     UserError,
     console,
     default_out,
@@ -89,7 +90,7 @@ def _measured_elsewhere(path: Path) -> bool:
 @effects_option("none")
 @click.option(
     "--noise-mm",
-    type=click.FloatRange(0.0, 100.0),
+    type=FloatRange(0.0, 100.0),
     default=0.3,
     show_default=True,
     help="One-sigma Gaussian tracker noise on each measured coordinate [mm].",

@@ -18,6 +18,7 @@ from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
     OVERWRITE_POLICY,
+    FloatRange,
     check_configurations,
     console,
     default_out,
@@ -45,7 +46,7 @@ FILES = (
 )
 @click.option(
     "--step",
-    type=click.FloatRange(0.1, 90.0),
+    type=FloatRange(0.1, 90.0),
     default=5.0,
     show_default=True,
     help="Grid spacing of theta1 and theta2 over a full turn [deg].",
