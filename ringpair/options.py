@@ -15,6 +15,8 @@ the temporaries an interrupted run of ringpair left behind.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import re
 from collections.abc import Callable, Iterable, Iterator
@@ -173,6 +175,22 @@ MAX_CONFIGS = click.option(
     help="Refuse to solve more configurations than this, each model compared counting once "
     "(a guard against typing 0.001 for 1); raise it for a long run.",
 )
+
+
+def json_text(doc: object) -> str:
+    """``doc`` as strict JSON text, indented, with a final newline; NaN and infinities,
+    which JSON does not have, become null."""
+    return json.dumps(_strict(doc), indent=2, allow_nan=False) + "\n"
+
+
+def _strict(x: object) -> object:
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _strict(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_strict(v) for v in x]
+    return x
 
 
 def slug(name: str) -> str:

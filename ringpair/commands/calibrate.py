@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
@@ -21,6 +20,7 @@ from ringpair.options import (
     bad_input,
     console,
     effects_option,
+    json_text,
     measured_data,
     model_from,
     output_path,
@@ -130,23 +130,19 @@ def calibrate(
         warn(w)
     warnings += later
     if json_out is not None:
-
-        def finite(x: float) -> float | None:
-            return float(x) if np.isfinite(x) else None  # JSON has no inf or NaN
-
         doc = {
             "design": d.name,
             "model": model.name,
             "rows": len(m),
             "estimate": res.estimate,
-            "standard_error": {k: finite(v) for k, v in res.standard_error.items()},
+            "standard_error": res.standard_error,
             "nominal": res.nominal,
             **(
                 {"profile_interval": {k: [v.lower, v.upper] for k, v in intervals.items()}}
                 if profile
                 else {}
             ),
-            "correlation": [[finite(c) for c in row] for row in np.round(res.correlation, 6)],
+            "correlation": np.round(res.correlation, 6).tolist(),
             "rmse_mm": res.rmse_mm,
             "max_abs_mm": res.max_abs_mm,
             "noise_mm": res.noise_mm,
@@ -154,5 +150,5 @@ def calibrate(
             "message": res.message,
             "warnings": warnings,
         }
-        write_text(json_out, json.dumps(doc, indent=2) + "\n")
+        write_text(json_out, json_text(doc))
         console.print(f"wrote {json_out}")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,6 +22,7 @@ from ringpair.options import (
     console,
     duration,
     err_console,
+    json_text,
     measured_data,
     output_path,
     path_option,
@@ -137,7 +137,7 @@ def diagnose(
     for note in later:
         warn(note)
     if json_out is not None:
-        write_text(json_out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
+        write_text(json_out, json_text(doc))
         console.print(f"wrote {json_out}")
     if report is not None:
         for path in write_report(result, m, report):

@@ -22,6 +22,7 @@ from ringpair.options import (
     UserError,
     console,
     default_out,
+    json_text,
     output_path,
     path_option,
     progress,
@@ -103,7 +104,7 @@ def optimize(
             f"{pareto.seconds:.1f} s on {pareto.workers or 'no'} workers"
         )
     doc = summary(study, best, start_ws, end_ws, pareto)
-    write_text(out / "summary.json", json.dumps(doc, indent=2) + "\n")
+    write_text(out / "summary.json", json_text(doc))
     written.append(out / "summary.json")
     for path in written:
         console.print(f"wrote {path}")

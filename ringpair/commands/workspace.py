@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
@@ -24,6 +23,7 @@ from ringpair.options import (
     default_out,
     design_from,
     effects_option,
+    json_text,
     model_from,
     output_path,
     path_option,
@@ -87,7 +87,7 @@ def workspace(
         header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
     )
     summary = workspace_summary(ws, d, step, model.name)
-    write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    write_text(out / "summary.json", json_text(summary))
     pictures = write_workspace_plots(ws, sweep, d, out)
     _print_summary(summary)
     console.print(
