@@ -1,8 +1,9 @@
 """Runs killed outright (SIGKILL, no clean-up handlers) at a random moment, then rerun
 (issue 17): the rerun leaves no stray temporary and gives the files of an uninterrupted
-run. ``optimize`` resumes its Pareto points (``OUT/points``); ``cad`` rebuilds every part
-(its files are replaced atomically, so a killed run leaves old or new files, never half
-of one). The kill times are drawn from a seeded generator, so a failure reproduces.
+run. ``optimize`` resumes its Pareto points (``OUT/points``); ``cad`` and ``diagnose``
+start again (their files are replaced atomically, so a killed run leaves old or new files,
+never half of one). The kill times are drawn from a seeded generator, so a failure
+reproduces.
 """
 
 from __future__ import annotations
@@ -98,3 +99,20 @@ def test_cad_killed_and_rerun_equals_an_uninterrupted_run(tmp_path):
     # the summary holds timings, STEP files their time of writing
     volatile = ("cad_summary.json", "ringpair_robot.step")
     assert files(tmp_path / "again", skip=volatile) == files(tmp_path / "whole", skip=volatile)
+
+
+def test_diagnose_killed_and_rerun_equals_an_uninterrupted_run(tmp_path):
+    assert ringpair("synth", "--n", "8", "--out", "bench", cwd=tmp_path).returncode == 0
+    args = ("diagnose", "bench", "--folds", "2")
+    whole = ringpair(*args, "--json", "whole.json", "--report", "whole", cwd=tmp_path)
+    assert whole.returncode == 0, whole.stderr
+    after = random.Random(3).uniform(2.0, 6.0)
+    killed(*args, "--json", "again.json", "--report", "again", cwd=tmp_path, after=after)
+    rerun = ringpair(*args, "--json", "again.json", "--report", "again", cwd=tmp_path)
+    assert rerun.returncode == 0, rerun.stderr
+    assert temporaries(tmp_path) == []
+    assert files(tmp_path / "again") == files(tmp_path / "whole")
+    doc = [json.loads((tmp_path / f"{d}.json").read_text()) for d in ("again", "whole")]
+    for d in doc:
+        d.pop("time_s")
+    assert doc[0] == doc[1]
