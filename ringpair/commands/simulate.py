@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections import deque
+from collections import Counter, deque
 from pathlib import Path
 
 import click
@@ -110,7 +110,7 @@ def simulate(
     step = n if ordered else CHUNK  # a path is solved in one go, from state to state
     head: list[dict] = []
     tail: deque[dict] = deque(maxlen=SHOWN // 2)
-    failures: dict[str, int] = {}
+    failures: Counter[str] = Counter()  # why rows have no state
     header = f"ringpair simulate, design '{d.name}', model {model.name}"
     solving = "solving equilibria (the first run on a machine compiles the model)"
     with progress(solving, total=n) as update, csv_writer(out, POSE_COLUMNS, header) as put:
@@ -128,16 +128,14 @@ def simulate(
             put(rows)
             head += rows[: SHOWN - len(head)]
             tail.extend(rows)
-            for row in rows:
-                if not row["converged"]:
-                    failures[row["failure"]] = failures.get(row["failure"], 0) + 1
+            failures.update(row["failure"] for row in rows if not row["converged"])
             update(advance=len(rows))
     if not quiet:
         shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
         _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)")
     if failures:
         warn(
-            f"{sum(failures.values())} configuration(s) have no state: "
+            f"{failures.total()} configuration(s) have no state: "
             + "; ".join(sorted(failures))
         )
     console.print(f"wrote {out} ({n} configurations)")
