@@ -87,8 +87,8 @@ def calibrate(
     freed = names or default_free(model.effects)
     if coordinates(m) < len(freed) and not priors:
         raise UserError(
-            f"{m.source}: {len(m)} row(s) give {coordinates(m)} measured number(s), fewer than "
-            f"the {len(freed)} parameters to fit ({', '.join(freed)}); measure more "
+            f"{m.source}: {coordinates(m)} measured number(s) in {len(m)} row(s) cannot "
+            f"determine {len(freed)} parameters ({', '.join(freed)}); measure more "
             "configurations" + (" or free fewer" if free is not None else "")
         )
     warnings = out_of_reach(d, m)
