@@ -32,10 +32,15 @@ from pathlib import Path
 import tomli_w
 from click.testing import CliRunner
 from hypothesis import strategies as st
+from hypothesis.configuration import set_hypothesis_home_dir
 from studies import SMALL
 
 from design.designfile import SECTIONS, default_design, design_to_dict
 from ringpair.cli import cli
+
+# Hypothesis caches what it learns (unicode tables, constants) in .hypothesis/ of the working
+# directory; keep it out of the checkout, in the system's temporary folder.
+set_hypothesis_home_dir(Path(tempfile.gettempdir(), "ringpair-hypothesis"))
 
 DELETE = "<delete>"
 """A mutation's value that removes the key."""
