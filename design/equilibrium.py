@@ -305,6 +305,9 @@ class _Kernels:
         padded to a power of two below GRAIN and to a multiple of GRAIN above (few distinct
         map sizes, at most half the work wasted). Returns each output as (rows, N)."""
         n = args[0].shape[1]
+        if n == 0:
+            f = getattr(self, which)
+            return [np.zeros((f.size1_out(i), 0)) for i in range(f.n_out())]
         outs: list[list[np.ndarray]] = []
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)

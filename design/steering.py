@@ -15,7 +15,11 @@ pose; :func:`_sensitivity`, compiled from the model's own expressions).
 For a batch of targets: the tip is solved on a grid of ring angles (SEED_STEP); every
 local minimum of the distance to the target on that grid (the angles are periodic) seeds
 a Levenberg-Marquardt iteration on the angles (Nocedal & Wright, *Numerical Optimization*,
-2006, sec. 10.3), each trial angle pair solved for its state as every caller solves it.
+2006, sec. 10.3), each trial angle pair solved for its state as every caller solves it;
+so do the rim's closest points, offset to either side of parallel rings (:func:`_rim_seeds`), and
+each result, its angles swapped, seeds one more (alike rings swapped give nearly the same
+net moment: the pair of solutions that merges at the workspace's rim, too close together
+for the grid).
 Solutions whose angles agree to SAME_ANGLE are one. A solution reaches its target when the
 tip is within REACHED of it; a target that no seed reaches gets the closest point found,
 flagged ``reached = False`` (out of reach, or only reached through a snap).
@@ -40,11 +44,19 @@ from design.model import RingPairModel
 from design.registry import index
 from design.workspace import angle_grid
 
-SEED_STEP = np.deg2rad(10.0)
+SEED_STEP = np.deg2rad(5.0)
 """Spacing of the grid of ring angles whose local minima of the distance to a target seed
 the iterations. [rad]"""
 SEEDS = 6
-"""Seeds per target at most (the closest local minima)."""
+MAX_SEEDS = 24
+"""Grid seeds per target: the SEEDS closest local minima, and more (up to MAX_SEEDS) where
+they are closer than the grid resolves."""
+RIM_STEP = np.deg2rad(2.0)
+RIM_SEEDS = 2
+RIM_OFFSET = np.deg2rad(1.0)
+"""The rim of the workspace (the rings parallel) is sampled every RIM_STEP; its RIM_SEEDS
+closest local minima to a target, and the rim points next to them, seed iterations at
+RIM_OFFSET and 4 RIM_OFFSET to either side of parallel. [rad]"""
 REACHED = 1e-9
 """A target is reached when the tip is this close to it. [m]"""
 SAME_ANGLE = 1e-6
@@ -127,12 +139,21 @@ def _evaluate(
 
 
 def _seeds(grid_tip: np.ndarray, targets: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """Grid indices (i, j) of up to ``count`` local minima of the distance to each target
-    (periodic grid (G, G, 2) of tips, NaN where no state): (target index, flat grid index)."""
+    """Local minima of the distance to each target on the periodic grid (G, G, 2) of tips
+    (NaN where no state): the ``count`` closest, and any closer than the grid's resolution
+    (the 90th percentile of the tip's move between neighbours: a valley of near-solutions
+    has many), at most MAX_SEEDS. Returns (target index, flat grid index)."""
     g = grid_tip.shape[0]
+    moves = np.concatenate(
+        [
+            np.linalg.norm(np.diff(grid_tip, axis=k, append=grid_tip.take([0], axis=k)), axis=-1)
+            for k in (0, 1)
+        ]
+    )
+    resolution = np.nanpercentile(moves, 90) if np.isfinite(moves).any() else 0.0
     rows, cells = [], []
-    for start in range(0, len(targets), 512):
-        t = targets[start : start + 512]
+    for start in range(0, len(targets), 128):
+        t = targets[start : start + 128]
         d = np.linalg.norm(grid_tip[None] - t[:, None, None, :], axis=-1)
         d = np.where(np.isfinite(d), d, np.inf)
         minimum = np.isfinite(d)
@@ -141,11 +162,39 @@ def _seeds(grid_tip: np.ndarray, targets: np.ndarray, count: int) -> tuple[np.nd
                 if di or dj:
                     minimum &= d <= np.roll(d, (di, dj), axis=(1, 2))
         flat = np.where(minimum, d, np.inf).reshape(len(t), g * g)
-        best = np.argsort(flat, axis=1)[:, :count]
-        keep = np.isfinite(np.take_along_axis(flat, best, axis=1))
+        best = np.argsort(flat, axis=1)[:, :MAX_SEEDS]
+        dist = np.take_along_axis(flat, best, axis=1)
+        keep = np.isfinite(dist) & ((np.arange(best.shape[1]) < count) | (dist <= resolution))
         rows.append(np.broadcast_to(np.arange(start, start + len(t))[:, None], best.shape)[keep])
         cells.append(best[keep])
     return np.concatenate(rows), np.concatenate(cells)
+
+
+def _rim_seeds(
+    model: RingPairModel, params: np.ndarray, targets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Seeds on both sides of the parallel rings, near the closest points of the rim: (target
+    index, angles (2, P)). With the rings parallel the tip is at the rim of the workspace,
+    where the map from angles to tip folds and its solutions come in pairs closer together
+    than the seed grid (one on each side of theta1 = theta2)."""
+    loop = angle_grid(RIM_STEP)
+    eq = solve_equilibria(model, params, loop, loop)
+    rim = np.where(eq.stable[:, None], eq.position[:, 1:], np.nan)
+    d = np.linalg.norm(rim[None] - targets[:, None, :], axis=-1)
+    d = np.where(np.isfinite(d), d, np.inf)
+    minimum = np.isfinite(d) & (d <= np.roll(d, 1, axis=1)) & (d <= np.roll(d, -1, axis=1))
+    best = np.argsort(np.where(minimum, d, np.inf), axis=1)[:, :RIM_SEEDS]
+    keep = np.isfinite(np.take_along_axis(d, best, axis=1)) & np.take_along_axis(
+        minimum, best, axis=1
+    )
+    owner = np.broadcast_to(np.arange(len(targets))[:, None], best.shape)[keep]
+    phi = loop[best[keep]]
+    starts = [
+        np.vstack([phi + along + side, phi + along - side])
+        for along in (-RIM_STEP, 0.0, RIM_STEP)
+        for side in (RIM_OFFSET, -RIM_OFFSET, 4 * RIM_OFFSET, -4 * RIM_OFFSET)
+    ]
+    return np.tile(owner, len(starts)), np.hstack(starts)
 
 
 def _iterate(
@@ -237,15 +286,25 @@ def steer(
     """
     params = np.asarray(params, float)
     targets = np.atleast_2d(np.asarray(targets, float))
-    if targets.shape[1] != 2 or not np.isfinite(targets).all():
-        raise ValueError("targets must be finite (y, z) pairs, shape (M, 2)")
+    if targets.shape[1] != 2 or not np.isfinite(targets).all() or len(targets) == 0:
+        raise ValueError("targets must be finite (y, z) pairs, shape (M, 2), M >= 1")
     angles = angle_grid(seed_step)
     g1, g2 = np.meshgrid(angles, angles, indexing="ij")
     grid = solve_equilibria(model, params, g1.ravel(), g2.ravel())
     grid_tip = np.where(grid.stable[:, None], grid.position[:, 1:], np.nan)
     owner, cell = _seeds(grid_tip.reshape(len(angles), len(angles), 2), targets, seeds)
     start = np.vstack([g1.ravel()[cell], g2.ravel()[cell]])
+    rim_owner, rim_start = _rim_seeds(model, params, targets)
+    owner, start = np.concatenate([owner, rim_owner]), np.hstack([start, rim_start])
     theta, error = _iterate(model, params, targets[owner].T, start)
+    # The rings are alike, so the angles swapped give (nearly) the same net moment: the
+    # other solution of a pair, which the grid cannot tell apart near the workspace's rim
+    # (where the pair merges at the fold of the map).
+    more = np.flatnonzero(np.isfinite(error))
+    swapped, swapped_error = _iterate(model, params, targets[owner[more]].T, theta[::-1, more])
+    owner = np.concatenate([owner, owner[more]])
+    theta = np.hstack([theta, swapped])
+    error = np.concatenate([error, swapped_error])
     rows: list[int] = []
     answers: list[int] = []
     for t in range(len(targets)):

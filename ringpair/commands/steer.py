@@ -19,9 +19,14 @@ from ringpair.options import (
     design_from,
     effects_option,
     model_from,
+    output_path,
     path_option,
 )
 from ringpair.tables import write_csv
+
+MAX_TARGETS = 100_000
+"""Targets per run at most (about a minute with the baseline model, far more with the
+model for design work)."""
 
 STEER_COLUMNS = (
     "target",
@@ -152,7 +157,17 @@ def steer_command(
             f"target {far[0][0]:g},{far[0][1]:g} mm is farther from the robot's axis than its "
             f"free length ({limit:g} mm): no tip can get there (are the units mm?)"
         )
-    out = out or default_out(d.name, "steer.csv")
+    if len(points) > MAX_TARGETS:
+        raise UserError(
+            f"{len(points):,} targets; at most {MAX_TARGETS:,} per run (split the file)"
+        )
+    out = output_path(
+        out or default_out(d.name, "steer.csv"),
+        "--out",
+        folder=False,
+        typed=out is not None,
+        inputs=[design, targets],
+    )
     with console.status(
         f"steering to {len(points)} target(s) (the first run on a machine compiles the model)"
     ):
@@ -167,24 +182,26 @@ def steer_command(
 
 
 def _print(rows: list[dict], title: str) -> None:
+    """The solutions as a table, then a plain sentence for each target out of reach."""
     table = Table(title=title)
     for col in (
-        "target (y, z) [mm]",
+        "target [mm]",
         "theta1 [deg]",
         "theta2 [deg]",
-        "tip (y, z) [mm]",
+        "tip y, z [mm]",
         "fold margin",
         "state",
     ):
         table.add_column(col, justify="right")
     for row in rows:
         if not row["stable"]:
-            state = "NO STATE near this target"
+            state = "no state"
         elif row["reached"]:
-            flags = ["snapped"] * row["snapped"] + ["multistable"] * row["multistable"]
-            state = ", ".join(["reached", *flags])
+            state = ", ".join(
+                ["reached"] + ["snapped"] * row["snapped"] + ["multistable"] * row["multistable"]
+            )
         else:
-            state = f"OUT OF REACH: closest point {row['error_mm']:.3g} mm away"
+            state = "out of reach"
         table.add_row(
             f"{row['target_y_mm']:.2f}, {row['target_z_mm']:.2f}",
             f"{row['theta1_deg']:.3f}",
@@ -194,4 +211,13 @@ def _print(rows: list[dict], title: str) -> None:
             state,
         )
     console.print(table)
-    console.print(f"(reached: the tip within {REACHED / MM:g} mm of the target)")
+    console.print(f"reached: the tip within {REACHED / MM:g} mm of the target.")
+    for row in rows:
+        where = f"target {row['target']} ({row['target_y_mm']:g}, {row['target_z_mm']:g}) mm"
+        if not row["stable"]:
+            console.print(f"{where}: no configuration near it has a state.")
+        elif not row["reached"]:
+            console.print(
+                f"{where} is OUT OF REACH: the closest point, ({row['y_mm']:.3f}, "
+                f"{row['z_mm']:.3f}) mm, is {row['error_mm']:.3f} mm away."
+            )

@@ -9,7 +9,7 @@ from ringpair.cli import cli
 
 COMMANDS = {
     "branch", "cad", "calibrate", "diagnose", "effects", "optimize", "show", "simulate",
-    "study", "synth", "workspace",
+    "steer", "study", "synth", "workspace",
 }
 
 

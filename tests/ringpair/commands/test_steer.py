@@ -1,0 +1,61 @@
+"""``ringpair steer``: targets in, every solution (or the closest point) out, as a CSV whose
+angles, solved forward by ``simulate``'s solver, put the tip on the target."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from design.equilibrium import solve_design
+from design.model import RingPairModel
+
+
+def test_steer_writes_every_solution_and_they_land_on_the_target(
+    tmp_path, demonstrator, run, read_csv
+):
+    out = tmp_path / "steer.csv"
+    result = run("steer", "--effects", "none", "--to", "8,-3", "--to", "0,60", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    rows = read_csv(out)
+    first = [r for r in rows if r["target"] == "1"]
+    assert len(first) >= 2 and all(r["reached"] == "true" for r in first)
+    theta = np.deg2rad([[float(r["theta1_deg"]), float(r["theta2_deg"])] for r in first])
+    eq = solve_design(demonstrator, theta[:, 0], theta[:, 1], RingPairModel(frozenset()))
+    # The CSV keeps 9 significant digits of the angles: 1e-6 deg moves the tip < 1e-4 mm.
+    np.testing.assert_allclose(eq.position[:, 1:] * 1e3, [[8.0, -3.0]] * len(first), atol=1e-4)
+    (second,) = [r for r in rows if r["target"] == "2"]
+    assert second["reached"] == "false" and float(second["error_mm"]) > 30
+    assert "OUT OF REACH" in result.output
+
+
+def test_steer_reads_targets_from_a_csv(tmp_path, run, read_csv):
+    targets = tmp_path / "t.csv"
+    targets.write_text("# two points\ny_mm,z_mm\n5,0\n0,-5\n")
+    out = tmp_path / "s.csv"
+    result = run(
+        "steer", "--effects", "none", "--targets", str(targets), "--out", str(out), "--quiet"
+    )
+    assert result.exit_code == 0, result.output
+    assert {r["target"] for r in read_csv(out)} == {"1", "2"}
+
+
+@pytest.mark.parametrize(
+    ("args", "content", "message"),
+    [
+        (["--to", "3"], None, "expected Y,Z in mm"),
+        (["--to", "nan,2"], None, "two finite numbers"),
+        (["--to", "400,0"], None, "farther from the robot's axis than its free length"),
+        ([], None, "give a target"),
+        (["--targets", "{t}"], "y_mm,q\n1,2\n", "missing z_mm"),
+        (["--targets", "{t}"], "y_mm,z_mm\n1,2\n3,abc\n", "line 3"),
+    ],
+)
+def test_steer_refuses_bad_targets_with_one_message(tmp_path, run, args, content, message):
+    t = tmp_path / "t.csv"
+    if content is not None:
+        t.write_text(content)
+    out = tmp_path / "s.csv"
+    result = run("steer", *[a.format(t=t) for a in args], "--out", str(out))
+    assert result.exit_code == 2, result.output
+    assert message in result.output and "Traceback" not in result.output
+    assert not out.exists()
