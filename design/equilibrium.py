@@ -280,11 +280,11 @@ class _Kernels:
         outs += [x, *check.call([x, command, 1, prm])]
         return ca.Function(f"leap{count}", [command, prm], outs)
 
-    def _mapped(self, which: str, size: int) -> ca.Function:
-        key = (which, size)
+    def _mapped(self, function: ca.Function, size: int) -> ca.Function:
+        key = (function.name(), size)
         with self._lock:
             if key not in self._maps:
-                self._maps[key] = getattr(self, which).map(size, "thread", THREADS)
+                self._maps[key] = function.map(size, "thread", THREADS)
             return self._maps[key]
 
     def _shared(self, params: np.ndarray, size: int) -> np.ndarray:
@@ -299,14 +299,18 @@ class _Kernels:
                 self._tiles[key] = np.tile(params, size).reshape(size, params.size).T
             return self._tiles[key]
 
-    def run(self, which: str, args: list[np.ndarray], params: np.ndarray) -> list[np.ndarray]:
-        """Evaluate ``which`` on the columns of ``args`` (each (rows, N)) with ``params``
-        shared, shape (k,), or per column, (k, N); in chunks of CHUNK columns, the last one
-        padded to a power of two below GRAIN and to a multiple of GRAIN above (few distinct
-        map sizes, at most half the work wasted). Returns each output as (rows, N)."""
+    def run(
+        self, which: str | ca.Function, args: list[np.ndarray], params: np.ndarray
+    ) -> list[np.ndarray]:
+        """Evaluate ``which`` (a kernel's name, or another function of the model whose last
+        input is the parameters, e.g. :mod:`design.steering`'s) on the columns of ``args``
+        (each (rows, N)) with ``params`` shared, shape (k,), or per column, (k, N); in
+        chunks of CHUNK columns, the last one padded to a power of two below GRAIN and to a
+        multiple of GRAIN above (few distinct map sizes, at most half the work wasted).
+        Returns each output as (rows, N)."""
+        f = getattr(self, which) if isinstance(which, str) else which
         n = args[0].shape[1]
         if n == 0:
-            f = getattr(self, which)
             return [np.zeros((f.size1_out(i), 0)) for i in range(f.n_out())]
         outs: list[list[np.ndarray]] = []
         for start in range(0, n, CHUNK):
@@ -320,7 +324,7 @@ class _Kernels:
                 chunk = [np.pad(c, ((0, 0), (0, size - count)), mode="edge") for c in chunk]
             if params.ndim == 1:
                 chunk.append(self._shared(params, size))
-            results = evaluate_columns(self._mapped(which, size), chunk)
+            results = evaluate_columns(self._mapped(f, size), chunk)
             outs = outs or [[] for _ in results]
             for acc, out in zip(outs, results, strict=True):
                 acc.append(out[:, :count])

@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from design.compiled import compile_function
-from design.equilibrium import solve_equilibria
+from design.equilibrium import kernels, solve_equilibria
 from design.model import RingPairModel
 from design.registry import index
 from design.workspace import angle_grid
@@ -55,8 +55,8 @@ RIM_STEP = np.deg2rad(2.0)
 RIM_SEEDS = 2
 RIM_OFFSET = np.deg2rad(1.0)
 """The rim of the workspace (the rings parallel) is sampled every RIM_STEP; its RIM_SEEDS
-closest local minima to a target, and the rim points next to them, seed iterations at
-RIM_OFFSET and 4 RIM_OFFSET to either side of parallel. [rad]"""
+closest local minima to a target (within the seed grid's resolution of it) seed iterations
+at RIM_OFFSET and 4 RIM_OFFSET to either side of parallel. [rad]"""
 REACHED = 1e-9
 """A target is reached when the tip is this close to it. [m]"""
 SAME_ANGLE = 1e-6
@@ -64,6 +64,14 @@ SAME_ANGLE = 1e-6
 MAX_TURN = 0.3
 """Largest change of a ring angle per iteration (keeps the iteration near its branch).
 [rad]"""
+SWAP_NEAR = np.deg2rad(5.0)
+"""A solution's swapped angles seed one more iteration unless they are this close to a
+solution already found (alike rings: the swap is nearly the mirror solution). [rad]"""
+SEED_MERGE = np.deg2rad(1.0)
+"""Grid seeds of one target that one Newton step brings this close are one. [rad]"""
+MERGE = 1e-3
+"""Iterations of one target whose angles come this close are merged (they go on to the
+same solution). [rad]"""
 MAX_ITERATIONS = 80
 """Levenberg-Marquardt iterations per seed at most."""
 MAX_DAMPING = 1e8
@@ -130,19 +138,21 @@ def _evaluate(
     jac = np.full((theta.shape[1], 2, 2), np.nan)
     ok = eq.stable.copy()
     if ok.any():
-        f = _sensitivity(model).map(int(ok.sum()))
-        t, d, _ = f(eq.unknowns[ok].T, theta[:, ok], params)
+        d = kernels(model).run(_sensitivity(model), [eq.unknowns[ok].T, theta[:, ok]], params)[1]
         tip[:, ok] = eq.position[ok, 1:].T
-        jac[ok] = np.asarray(d).T.reshape(-1, 2, 2).transpose(0, 2, 1)
+        jac[ok] = d.T.reshape(-1, 2, 2).transpose(0, 2, 1)
         ok[ok] = np.isfinite(jac[ok]).all(axis=(1, 2))
     return tip, jac, ok
 
 
-def _seeds(grid_tip: np.ndarray, targets: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+def _seeds(
+    grid_tip: np.ndarray, targets: np.ndarray, count: int
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Local minima of the distance to each target on the periodic grid (G, G, 2) of tips
     (NaN where no state): the ``count`` closest, and any closer than the grid's resolution
     (the 90th percentile of the tip's move between neighbours: a valley of near-solutions
-    has many), at most MAX_SEEDS. Returns (target index, flat grid index)."""
+    has many), at most MAX_SEEDS. Returns (target index, flat grid index, the resolution
+    [m])."""
     g = grid_tip.shape[0]
     moves = np.concatenate(
         [
@@ -167,16 +177,17 @@ def _seeds(grid_tip: np.ndarray, targets: np.ndarray, count: int) -> tuple[np.nd
         keep = np.isfinite(dist) & ((np.arange(best.shape[1]) < count) | (dist <= resolution))
         rows.append(np.broadcast_to(np.arange(start, start + len(t))[:, None], best.shape)[keep])
         cells.append(best[keep])
-    return np.concatenate(rows), np.concatenate(cells)
+    return np.concatenate(rows), np.concatenate(cells), float(resolution)
 
 
 def _rim_seeds(
-    model: RingPairModel, params: np.ndarray, targets: np.ndarray
+    model: RingPairModel, params: np.ndarray, targets: np.ndarray, near_rim: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Seeds on both sides of the parallel rings, near the closest points of the rim: (target
     index, angles (2, P)). With the rings parallel the tip is at the rim of the workspace,
     where the map from angles to tip folds and its solutions come in pairs closer together
-    than the seed grid (one on each side of theta1 = theta2)."""
+    than the seed grid (one on each side of theta1 = theta2). Only for targets within
+    ``near_rim`` of the rim. [m]"""
     loop = angle_grid(RIM_STEP)
     eq = solve_equilibria(model, params, loop, loop)
     rim = np.where(eq.stable[:, None], eq.position[:, 1:], np.nan)
@@ -184,24 +195,55 @@ def _rim_seeds(
     d = np.where(np.isfinite(d), d, np.inf)
     minimum = np.isfinite(d) & (d <= np.roll(d, 1, axis=1)) & (d <= np.roll(d, -1, axis=1))
     best = np.argsort(np.where(minimum, d, np.inf), axis=1)[:, :RIM_SEEDS]
-    keep = np.isfinite(np.take_along_axis(d, best, axis=1)) & np.take_along_axis(
-        minimum, best, axis=1
-    )
+    near = np.take_along_axis(d, best, axis=1) <= near_rim
+    keep = near & np.take_along_axis(minimum, best, axis=1)
     owner = np.broadcast_to(np.arange(len(targets))[:, None], best.shape)[keep]
     phi = loop[best[keep]]
     starts = [
-        np.vstack([phi + along + side, phi + along - side])
-        for along in (-RIM_STEP, 0.0, RIM_STEP)
+        np.vstack([phi + side, phi - side])
         for side in (RIM_OFFSET, -RIM_OFFSET, 4 * RIM_OFFSET, -4 * RIM_OFFSET)
     ]
     return np.tile(owner, len(starts)), np.hstack(starts)
 
 
+def _step(jac: np.ndarray, residual: np.ndarray, damping: np.ndarray, limit: float) -> np.ndarray:
+    """Levenberg-Marquardt steps (P, 2) of the angles for derivatives jac (P, 2, 2) and
+    residuals (P, 2): -(J^T J + damping diag(J^T J))^-1 J^T r, each scaled to at most
+    ``limit`` per angle [rad] (NaN where J is not finite)."""
+    normal = jac.transpose(0, 2, 1) @ jac
+    normal += damping[:, None, None] * (
+        np.eye(2) * np.maximum(np.diagonal(normal, axis1=1, axis2=2), 1e-12)[:, :, None]
+    )
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(normal).all(axis=(1, 2))
+        step = np.full(residual.shape, np.nan)
+        step[ok] = -np.linalg.solve(
+            normal[ok], (jac[ok].transpose(0, 2, 1) @ residual[ok][:, :, None])
+        )[:, :, 0]
+    return step * np.minimum(1.0, limit / np.maximum(np.abs(step).max(axis=1), 1e-300))[:, None]
+
+
+def _merged(owner: np.ndarray, theta: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """Of ``columns``, those whose angles fall in the same MERGE cell as an earlier column of
+    the same target (they follow it to the same solution)."""
+    cell = np.round(np.mod(theta[:, columns], 2 * np.pi) / MERGE).astype(np.int64)
+    keys = np.vstack([owner[columns], cell])
+    _, first = np.unique(keys, axis=1, return_index=True)
+    later = np.ones(columns.size, bool)
+    later[first] = False
+    return columns[later]
+
+
 def _iterate(
-    model: RingPairModel, params: np.ndarray, target: np.ndarray, theta: np.ndarray
+    model: RingPairModel,
+    params: np.ndarray,
+    target: np.ndarray,
+    theta: np.ndarray,
+    owner: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Levenberg-Marquardt on the ring angles of each column: (angles (2, P), distance of
-    the tip to the target (P,)). target (2, P) [m], theta (2, P) starts [rad]."""
+    the tip to the target (P,), inf for a column merged into another of the same target
+    (``owner``) on its way). target (2, P) [m], theta (2, P) starts [rad]."""
     theta = theta.copy()
     tip, jac, ok = _evaluate(model, params, theta)
     error = np.where(ok, np.linalg.norm(tip - target, axis=0), np.inf)
@@ -209,17 +251,12 @@ def _iterate(
     running = ok.copy()
     for _ in range(MAX_ITERATIONS):
         running &= (error > 1e-3 * REACHED) & (damping < MAX_DAMPING)
+        merged = _merged(owner, theta, np.flatnonzero(running | (error <= REACHED)))
+        running[merged], error[merged] = False, np.inf
         a = np.flatnonzero(running)
         if a.size == 0:
             break
-        j, e = jac[a], (tip - target)[:, a].T
-        normal = j.transpose(0, 2, 1) @ j
-        normal += damping[a, None, None] * (
-            np.eye(2) * np.maximum(np.diagonal(normal, axis1=1, axis2=2), 1e-12)[:, :, None]
-        )
-        with np.errstate(invalid="ignore"):
-            step = -np.linalg.solve(normal, (j.transpose(0, 2, 1) @ e[:, :, None]))[:, :, 0]
-        step *= np.minimum(1.0, MAX_TURN / np.maximum(np.abs(step).max(axis=1), 1e-300))[:, None]
+        step = _step(jac[a], (tip - target)[:, a].T, damping[a], MAX_TURN)
         trial = theta[:, a] + step.T
         t_tip, t_jac, t_ok = _evaluate(model, params, trial)
         t_error = np.where(t_ok, np.linalg.norm(t_tip - target[:, a], axis=0), np.inf)
@@ -259,12 +296,12 @@ def _fold_margin(
     if not ok.any():
         return out
     n, m = model.n_unknowns, int(ok.sum())
-    f = _sensitivity(model).map(m)
+    f, kern = _sensitivity(model), kernels(model)
     unloaded = params.copy()
     unloaded[index("load_scale")] = 0.0
     rest = np.asarray(model.initial.map(m)(theta[ok].T, unloaded))
-    dr_dx = np.asarray(f(unknowns[ok].T, theta[ok].T, params)[2]).T.reshape(m, n, n)
-    k = np.asarray(f(rest, theta[ok].T, unloaded)[2]).T.reshape(m, n, n)
+    dr_dx = kern.run(f, [unknowns[ok].T, theta[ok].T], params)[2].T.reshape(m, n, n)
+    k = kern.run(f, [rest, theta[ok].T], unloaded)[2].T.reshape(m, n, n)
     ratio = np.linalg.solve(k.transpose(0, 2, 1), dr_dx.transpose(0, 2, 1))
     out[ok] = np.linalg.eigvals(ratio).real.min(axis=1)
     return out
@@ -290,18 +327,41 @@ def steer(
         raise ValueError("targets must be finite (y, z) pairs, shape (M, 2), M >= 1")
     angles = angle_grid(seed_step)
     g1, g2 = np.meshgrid(angles, angles, indexing="ij")
-    grid = solve_equilibria(model, params, g1.ravel(), g2.ravel())
-    grid_tip = np.where(grid.stable[:, None], grid.position[:, 1:], np.nan)
-    owner, cell = _seeds(grid_tip.reshape(len(angles), len(angles), 2), targets, seeds)
-    start = np.vstack([g1.ravel()[cell], g2.ravel()[cell]])
-    rim_owner, rim_start = _rim_seeds(model, params, targets)
+    grid_theta = np.vstack([g1.ravel(), g2.ravel()])
+    grid_tip, grid_jac, _ = _evaluate(model, params, grid_theta)
+    owner, cell, resolution = _seeds(
+        grid_tip.T.reshape(len(angles), len(angles), 2), targets, seeds
+    )
+    # One Newton step from each seed with the grid's derivative (at most a grid step):
+    # seeds that it brings together go on as one.
+    residual = (grid_tip[:, cell] - targets[owner].T).T
+    step = _step(grid_jac[cell], residual, np.full(cell.size, 1e-9), seed_step)
+    start = grid_theta[:, cell] + np.where(np.isfinite(step), step, 0.0).T
+    cells = np.round(np.mod(start, 2 * np.pi) / SEED_MERGE).astype(np.int64)
+    _, first = np.unique(np.vstack([owner, cells]), axis=1, return_index=True)
+    owner, start = owner[np.sort(first)], start[:, np.sort(first)]
+    rim_owner, rim_start = _rim_seeds(model, params, targets, resolution)
     owner, start = np.concatenate([owner, rim_owner]), np.hstack([start, rim_start])
-    theta, error = _iterate(model, params, targets[owner].T, start)
+    theta, error = _iterate(model, params, targets[owner].T, start, owner)
     # The rings are alike, so the angles swapped give (nearly) the same net moment: the
     # other solution of a pair, which the grid cannot tell apart near the workspace's rim
     # (where the pair merges at the fold of the map).
-    more = np.flatnonzero(np.isfinite(error))
-    swapped, swapped_error = _iterate(model, params, targets[owner[more]].T, theta[::-1, more])
+    found = np.flatnonzero(error <= REACHED)
+    swapped_start = theta[::-1, found]
+    # A swapped start near a solution already found of the same target would go there.
+    near = np.zeros(found.size, bool)
+    for k in range(found.size):
+        mine = found[owner[found] == owner[found[k]]]
+        near[k] = (
+            np.abs(np.angle(np.exp(1j * (theta[:, mine] - swapped_start[:, k : k + 1]))))
+            .max(axis=0)
+            .min()
+            < SWAP_NEAR
+        )
+    more = found[~near]
+    swapped, swapped_error = _iterate(
+        model, params, targets[owner[more]].T, theta[::-1, more], owner[more]
+    )
     owner = np.concatenate([owner, owner[more]])
     theta = np.hstack([theta, swapped])
     error = np.concatenate([error, swapped_error])

@@ -1,0 +1,104 @@
+"""Steering: ringpair's batch inverse against per-target scipy least squares, in one run.
+
+Targets are the tips of random ring-angle pairs of the paper's demonstrator (baseline
+model), so every one is reachable. Solved two ways:
+
+- ringpair (:func:`design.steering.steer`): all targets in one batch; every distinct
+  solution of each target;
+- the named baseline: ``scipy.optimize.least_squares`` per target on the same forward map
+  (the state by :func:`design.equilibrium.solve_equilibria`, one configuration per call,
+  finite-difference Jacobian), started from the closest tip on the same 5-deg grid of ring
+  angles ringpair seeds from (the grid is solved once, outside the timing); it finds one
+  solution per target.
+
+It prints the time per target of each, their ratio (goal >= 50x), how many targets
+ringpair reaches (to 1e-6 mm), and whether the answers agree: every solution least
+squares converges to (to 1e-6 mm) is among ringpair's solutions for that target. Least
+squares runs on a subsample (``--n-scipy``) as it takes about 30 ms per target.
+
+    python benchmarks/steer.py [--n 10000] [--n-scipy 300] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from design.designfile import default_design
+from design.equilibrium import solve_equilibria
+from design.model import model_for
+from design.steering import REACHED, SEED_STEP, steer
+from design.workspace import angle_grid
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=10_000, help="targets for ringpair")
+    ap.add_argument("--n-scipy", type=int, default=300, help="of them, for least squares")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+    model = model_for(frozenset())
+    params = model.parameters(default_design())
+    made = rng.uniform(0, 2 * np.pi, (2, args.n))
+    eq = solve_equilibria(model, params, made[0], made[1])
+    targets = eq.position[eq.stable, 1:]
+    steer(model, params, targets[:10])  # compile once per machine: not throughput
+
+    t0 = time.perf_counter()
+    result = steer(model, params, targets)
+    t_ringpair = (time.perf_counter() - t0) / len(targets)
+    reached = np.zeros(len(targets), bool)
+    reached[result.target_index[result.reached]] = True
+
+    angles = angle_grid(SEED_STEP)
+    g1, g2 = (g.ravel() for g in np.meshgrid(angles, angles, indexing="ij"))
+    grid = solve_equilibria(model, params, g1, g2)
+    grid_tip = np.where(grid.stable[:, None], grid.position[:, 1:], np.nan)
+
+    def tip(theta: np.ndarray) -> np.ndarray:
+        e = solve_equilibria(model, params, theta[:1], theta[1:])
+        return e.position[0, 1:] if e.stable[0] else np.full(2, 1.0)
+
+    sample = rng.choice(len(targets), min(args.n_scipy, len(targets)), replace=False)
+    agree = converged = 0
+    t0 = time.perf_counter()
+    answers = []
+    for k in sample:
+        start = int(np.nanargmin(np.linalg.norm(grid_tip - targets[k], axis=1)))
+        fit = least_squares(
+            lambda th, k=k: tip(th) - targets[k],
+            [g1[start], g2[start]],
+            xtol=1e-15,
+            ftol=1e-15,
+            gtol=1e-15,
+        )
+        answers.append(fit.x)
+    t_scipy = (time.perf_counter() - t0) / len(sample)
+    for k, x in zip(sample, answers, strict=True):
+        if np.linalg.norm(tip(x) - targets[k]) <= REACHED:
+            converged += 1
+            mine = result.theta[(result.target_index == k) & result.reached]
+            wrapped = np.abs(np.angle(np.exp(1j * (mine - x)))).max(axis=1)
+            agree += bool(len(mine) and wrapped.min() < 1e-5)
+
+    print(f"demonstrator, baseline model, {len(targets):,} reachable targets")
+    print(
+        f"  ringpair batch inverse : {t_ringpair * 1e3:8.3f} ms per target; reached "
+        f"{reached.mean():.2%}; {len(result) / len(targets):.2f} solutions per target"
+    )
+    print(
+        f"  scipy least_squares    : {t_scipy * 1e3:8.3f} ms per target ({len(sample)} targets); "
+        f"converged {converged}/{len(sample)}"
+    )
+    print(
+        f"  same answers: {agree}/{converged} least-squares solutions are among ringpair's"
+    )
+    print(f"  speed ratio (goal >= 50x): {t_scipy / t_ringpair:.0f}x")
+
+
+if __name__ == "__main__":
+    main()
