@@ -346,19 +346,19 @@ def steer(
     # The rings are alike, so the angles swapped give (nearly) the same net moment: the
     # other solution of a pair, which the grid cannot tell apart near the workspace's rim
     # (where the pair merges at the fold of the map).
-    found = np.flatnonzero(error <= REACHED)
-    swapped_start = theta[::-1, found]
-    # A swapped start near a solution already found of the same target would go there.
-    near = np.zeros(found.size, bool)
-    for k in range(found.size):
-        mine = found[owner[found] == owner[found[k]]]
+    solved = np.flatnonzero(error <= REACHED)
+    swapped_start = theta[::-1, solved]
+    # A swapped start near a solution already solved of the same target would go there.
+    near = np.zeros(solved.size, bool)
+    for k in range(solved.size):
+        mine = solved[owner[solved] == owner[solved[k]]]
         near[k] = (
             np.abs(np.angle(np.exp(1j * (theta[:, mine] - swapped_start[:, k : k + 1]))))
             .max(axis=0)
             .min()
             < SWAP_NEAR
         )
-    more = found[~near]
+    more = solved[~near]
     swapped, swapped_error = _iterate(
         model, params, targets[owner[more]].T, theta[::-1, more], owner[more]
     )
