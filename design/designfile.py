@@ -86,8 +86,16 @@ def _sections() -> dict[str, tuple[Key, ...]]:
         label, size = file_unit(p.name)
         optional = "optional: " if p.default is not None else ""
         sections.setdefault(section, []).append(
-            Key(leaf, f"{optional}{meaning} [{label}]", size, p.low, p.high, p.low_open,
-                vector, p.default)
+            Key(
+                leaf,
+                f"{optional}{meaning} [{label}]",
+                size,
+                p.low,
+                p.high,
+                p.low_open,
+                vector,
+                p.default,
+            )
         )
     return {name: tuple(keys) for name, keys in sections.items()}
 
@@ -275,16 +283,21 @@ def _check_clearance(design: Design) -> None:
         )
 
 
+def read_input(path: Path, kind: str, error: type[Exception]) -> str:
+    """The UTF-8 text of the ``kind`` file (e.g. "design") at ``path``; ``error`` with
+    one message if it does not exist or cannot be read."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(f"{kind} file {path} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"{kind} file {path} cannot be read: {exc}") from None
+
+
 def load_design(path: str | os.PathLike[str]) -> Design:
     """Read and validate a design file. Raises :class:`DesignError` on any problem."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DesignError(f"design file {p} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DesignError(f"design file {p} cannot be read: {exc}") from None
-    return loads_design(text, source=str(p))
+    return loads_design(read_input(p, "design", DesignError), source=str(p))
 
 
 def loads_design(text: str, source: str = "<string>") -> Design:

@@ -652,6 +652,12 @@ def _initial(model: RingPairModel, command: np.ndarray) -> np.ndarray:
     return x
 
 
+def _near(predicted: np.ndarray) -> np.ndarray:
+    """How far a ramp step's first correction may go for a predicted change of state
+    ``predicted`` (dimensionless): CORRECTION_RATIO of it, or MIN_CORRECTION."""
+    return np.maximum(CORRECTION_RATIO * predicted, MIN_CORRECTION)
+
+
 def _corrected(
     model: RingPairModel,
     steps: np.ndarray,
@@ -704,7 +710,7 @@ def _leap(
     taken = _norm(tangent, scale) <= count * FIRST_DISPLACEMENT
     for k in range(1, count + 1):
         move, steps, residuals = outs[:3]
-        near = np.maximum(CORRECTION_RATIO * _norm(move, scale), MIN_CORRECTION)
+        near = _near(_norm(move, scale))
         taken &= _corrected(model, steps, residuals, scale, near, k / count)
         if k < count:
             monitor, clearance = outs[3:5]
@@ -835,7 +841,7 @@ def _ramp(
         xs[:, a[moved]] -= step[:, moved]
         # The corrector must stay near the prediction (its first correction at most
         # CORRECTION_RATIO of the predicted change, or MIN_CORRECTION), and contract.
-        near = np.maximum(CORRECTION_RATIO * predicted[a], MIN_CORRECTION)
+        near = _near(predicted[a])
         contracting = np.where(corrections[a] == 0, sn <= near, sn <= CONTRACTION * last[a])
         give_up = ~candidate & (
             ~np.isfinite(sn) | ~contracting | (corrections[a] >= MAX_CORRECTIONS)

@@ -275,13 +275,16 @@ def _iterate(
     return np.mod(theta, 2 * np.pi), error
 
 
+def _wrapped(difference: np.ndarray) -> np.ndarray:
+    """|angle difference| wrapped to [0, pi]. [rad]"""
+    return np.abs(np.angle(np.exp(1j * difference)))
+
+
 def _distinct(theta: np.ndarray) -> np.ndarray:
     """Indices of the first of each group of angle pairs (P, 2) equal to SAME_ANGLE."""
     keep: list[int] = []
     for i, t in enumerate(theta):
-        if not any(
-            np.all(np.abs(np.angle(np.exp(1j * (t - theta[k])))) < SAME_ANGLE) for k in keep
-        ):
+        if not any(np.all(_wrapped(t - theta[k]) < SAME_ANGLE) for k in keep):
             keep.append(i)
     return np.array(keep, int)
 
@@ -353,10 +356,7 @@ def steer(
     for k in range(solved.size):
         mine = solved[owner[solved] == owner[solved[k]]]
         near[k] = (
-            np.abs(np.angle(np.exp(1j * (theta[:, mine] - swapped_start[:, k : k + 1]))))
-            .max(axis=0)
-            .min()
-            < SWAP_NEAR
+            _wrapped(theta[:, mine] - swapped_start[:, k : k + 1]).max(axis=0).min() < SWAP_NEAR
         )
     more = solved[~near]
     swapped, swapped_error = _iterate(

@@ -91,7 +91,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from design.designfile import DesignError, default_design, load_design
+from design.designfile import DesignError, default_design, load_design, read_input
 from design.geometry import WIRE_CLEARANCE
 from design.model import EFFECTS
 from design.records import Design
@@ -557,13 +557,7 @@ def loads_study(text: str, source: str = "<string>", folder: Path | None = None)
 def load_study(path: str | os.PathLike[str]) -> Study:
     """Read and validate a study file. Raises :class:`StudyError` on any problem."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise StudyError(f"study file {p} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise StudyError(f"study file {p} cannot be read: {exc}") from None
-    return loads_study(text, source=str(p), folder=p.parent)
+    return loads_study(read_input(p, "study", StudyError), source=str(p), folder=p.parent)
 
 
 def default_study() -> Study:
