@@ -16,9 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import os
 import pickle
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -26,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from design.atomic import atomic_path
 from optimize.sizing.nlp import OptimizationResult, optimize_design, pareto_values
 from optimize.sizing.studyfile import Study
 
@@ -86,11 +85,10 @@ def _solve_point(
 
 
 def _store(path: Path, point: ParetoPoint) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "wb") as f:
+    """Write one finished point atomically (a killed run leaves no half-written point; its
+    temporary, named after this process, is removed by the next run)."""
+    with atomic_path(path) as tmp, tmp.open("wb") as f:
         pickle.dump(point, f, protocol=4)
-    os.replace(tmp, path)
 
 
 def _load(path: Path) -> ParetoPoint | None:
