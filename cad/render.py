@@ -3,10 +3,20 @@
 pyvista renders without a display through EGL (Debian: ``libgl1 libegl1``; no X server,
 no ``start_xvfb``). Each picture is written atomically. Geometry in millimetres, base
 frame for assembly views, print frame for part views; z is up in every picture.
+
+VTK prints its own messages from C++ on stderr, with colour codes (without a display it
+first tried X: "bad X server connection. DISPLAY="). Without a display the EGL window is
+asked for directly, and :func:`render_all` captures whatever VTK still says and passes it
+on as one :class:`RenderWarning` in plain words.
 """
 
 from __future__ import annotations
 
+import os
+import sys
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +30,30 @@ from cad.solids import box
 from design.atomic import atomic_path
 
 pv.OFF_SCREEN = True
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+    # VTK's default window wants X and warns before it falls back to EGL; read when the
+    # first render window is made, so setting it here, after the import, is in time.
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
+class RenderWarning(UserWarning):
+    """Something VTK said while rendering, in plain words."""
+
+
+@contextmanager
+def vtk_messages() -> Iterator[None]:
+    """Keep VTK's own stderr output (C++ logger, colour codes) out of the terminal while
+    the block runs; what it said comes out afterwards as one :class:`RenderWarning`."""
+    with pv.vtk_verbosity("off"), pv.VtkErrorCatcher(send_to_logging=False) as caught:
+        yield
+    said = dict.fromkeys(e.alert.strip().splitlines()[-1] for e in caught.events if e.alert)
+    if said:
+        warnings.warn(
+            "the renders may be wrong or missing; VTK said: " + "; ".join(said),
+            RenderWarning,
+            stacklevel=3,
+        )
+
 
 BACKGROUND_TOP = (1.0, 1.0, 1.0)
 BACKGROUND_BOTTOM = (0.84, 0.87, 0.92)
@@ -215,7 +249,15 @@ def render_all(
     """Every picture: each printed part and the ring; the robot; the actuator; the tip,
     whole and in section; exploded actuator and tip. ``meshes``: (vertices, triangles)
     per part to reuse (the exported meshes). Returns the files written."""
-    out_dir = Path(out_dir)
+    with vtk_messages():
+        return _render_all(assembly, Path(out_dir), meshes)
+
+
+def _render_all(
+    assembly: RobotAssembly,
+    out_dir: Path,
+    meshes: dict[str, tuple[np.ndarray, np.ndarray]] | None,
+) -> list[Path]:
     cache = MeshCache.of(assembly, meshes)
     files: list[Path] = []
     for name, part in assembly.parts.items():
