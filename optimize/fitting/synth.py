@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from design.equilibrium import Equilibria, solve_sequence
+from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
 from design.model import RingPairModel, model_for
 from design.records import Design
 from design.registry import NAMES, index
@@ -59,6 +59,7 @@ class Synthetic:
     equilibria : the noise-free simulation of every commanded configuration, in order.
     dropped : number of configurations dropped (unconverged or unstable).
     snapped : number of kept configurations reached by a snap-through.
+    noise_free : the measurements without their noise (the same rows and coordinates).
     """
 
     measurements: Measurements
@@ -67,6 +68,7 @@ class Synthetic:
     equilibria: Equilibria
     dropped: int
     snapped: int
+    noise_free: Measurements
 
 
 SETUPS: dict[str, tuple[tuple[float, float], tuple[float, float]]] = {
@@ -126,6 +128,7 @@ def synthesize_data(
     tip_angles: bool = False,
     angle_noise_deg: float = 1.0,
     record_sigma: bool = False,
+    ordered: bool = True,
 ) -> Synthetic:
     """Simulate a bench run of ``design`` and return the data with how they were made.
 
@@ -139,6 +142,10 @@ def synthesize_data(
         :data:`design.registry.NAMES`) that differ from the design. [SI]
     tip_angles : also record the ring angles at the tip, with ``angle_noise_deg`` noise. [deg]
     record_sigma : write ``noise_mm`` as each row's sigma (default: the data do not say).
+    ordered : drive the robot along the commands and record the order (``sequence``);
+        False: each configuration's state on its own (the load ramp from rest,
+        :func:`design.equilibrium.solve_equilibria`), no ``sequence`` column (not with
+        ``hysteresis``, which needs a path).
     """
     if view not in VIEWS:
         raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
@@ -151,32 +158,41 @@ def synthesize_data(
     cmd = default_commands(n) if commands is None else np.asarray(commands, float).reshape(-1, 2)
     if len(cmd) == 0:
         raise ValueError("commands must hold at least one (theta1, theta2) pair")
-    eq = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
+    if not ordered and "hysteresis" in model.effects:
+        raise ValueError("hysteresis needs a path: synthesize it with ordered=True")
+    solve = solve_sequence if ordered else solve_equilibria
+    eq = solve(model, params, cmd[:, 0], cmd[:, 1])
     keep = eq.converged & eq.stable
     rng = np.random.default_rng(seed)
     noise = rng.normal(0.0, noise_mm * 1e-3, size=(len(cmd), 3))
     angle_noise = rng.normal(0.0, np.deg2rad(angle_noise_deg), size=(len(cmd), 2))
-    position = eq.position + noise
+    exact = eq.position.copy()
     if view == "top":
-        position[:, 2] = np.nan
+        exact[:, 2] = np.nan
+    position = exact + noise
     angles = eq.tip_angles + angle_noise if tip_angles else None
     sigma = np.full(len(cmd), noise_mm * 1e-3) if record_sigma and noise_mm > 0 else None
     rows = np.flatnonzero(keep)
-    m = make_measurements(
-        cmd[rows],
-        position[rows],
-        tip_angles=None if angles is None else angles[rows],
-        sequence=rows,
-        sigma=None if sigma is None else sigma[rows],
-        source=f"synthetic ({model.name} model, {view} view, noise {noise_mm:g} mm, seed {seed})",
-    )
+    source = f"synthetic ({model.name} model, {view} view, noise {noise_mm:g} mm, seed {seed})"
+
+    def measurements(position: np.ndarray, angles: np.ndarray | None) -> Measurements:
+        return make_measurements(
+            cmd[rows],
+            position[rows],
+            tip_angles=None if angles is None else angles[rows],
+            sequence=rows if ordered else None,
+            sigma=None if sigma is None else sigma[rows],
+            source=source,
+        )
+
     return Synthetic(
-        measurements=m,
+        measurements=measurements(position, angles),
         params=params,
         model=model,
         equilibria=eq,
         dropped=int(np.count_nonzero(~keep)),
         snapped=int(np.count_nonzero(eq.snapped & keep)),
+        noise_free=measurements(exact, eq.tip_angles if tip_angles else None),
     )
 
 
