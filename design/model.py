@@ -209,11 +209,12 @@ class RingPairModel:
     J(0)'s angle block has eigenvalues with positive real parts. (The eigenvalues of K^-1
     dr/dx, K the rod's own stiffness, are no test: a rod compressed beyond its dead-load
     buckling load, held by the field, has an indefinite K.) The solver's matrices of the
-    large-deflection rod (``newton``, ``relaxation``, ``descent``) come from a
-    COARSE_STEPS integration of the same rod: their relative error, about 1e-5, makes
-    Newton converge linearly at that rate and places a fold to that accuracy, for a fifth
-    of the cost; the residual, the pose and ``residual``'s dr/dx are those of the full
-    :data:`design.rod.STEPS` integration.
+    large-deflection rod (``newton``, ``relaxation``, ``descent``) and ``check``'s
+    stability monitor come from a COARSE_STEPS integration of the same rod: their relative
+    error, about 1e-5, makes Newton converge linearly at that rate and places a fold (and
+    a stability verdict's change) to that accuracy, for a fifth of the cost; the residual,
+    the pose and ``residual``'s dr/dx are those of the full :data:`design.rod.STEPS`
+    integration.
     """
 
     effects: frozenset[str] = frozenset()
@@ -510,7 +511,7 @@ class RingPairModel:
             return rod.shoot(base_wrench, length, ei, load * weight_rate, steps, rate, nodes)
 
         tip, _ = shoot(rod.STEPS)
-        r, loads_derivatives, _ = at(tip)
+        r, loads_derivatives, tip_loads = at(tip)
         # The solver's matrices: the coarse integration's sensitivities with the loads'
         # derivatives at the (full) tip, where the residual needs the loads anyway.
         coarse_nodes: list = []
@@ -519,16 +520,18 @@ class RingPairModel:
         gradient_map = energy_gradient_map(coarse, coarse_tip)
         # The exact dr/dx: sensitivities and loads of one full integration.
         tip_exact, exact = shoot(rod.STEPS, True)
-        _, exact_derivatives, exact_loads = at(tip_exact)
-        jac = derivatives(exact, exact_derivatives)[0]
-        # The stability test: the restricted Jacobians at the coarse integration's nodes,
-        # dr/dx at the tip, and the energy's Hessian in the unknowns (see the class).
+        jac = derivatives(exact, at(tip_exact)[1])[0]
+        # The stability test, from the coarse integration like the solver's matrices (a
+        # relative error of about 1e-5 moves a verdict only that close to a fold, where
+        # the solver places folds no closer; the full integration's sensitivities would
+        # cost three Newton iterations more per state): the restricted Jacobians at its
+        # nodes, dr/dx at the tip, and the energy's Hessian in the unknowns (see the class).
         unit = ca.vertcat(length * ca.DM.ones(3), ca.DM.ones(self.n_unknowns - 3))
-        hessian = (length / ei) * ca.diag(unit) @ energy_gradient_map(exact, tip_exact)
+        hessian = (length / ei) * ca.diag(unit) @ gradient_map
         focal = ca.vertcat(
-            restricted(coarse_nodes, tip_exact, exact_derivatives, exact_loads),
-            ca.vec(jac),
-            ca.vec(hessian @ jac @ ca.diag(unit)),
+            restricted(coarse_nodes, tip, loads_derivatives, tip_loads),
+            ca.vec(jac_solver),
+            ca.vec(hessian @ jac_solver @ ca.diag(unit)),
         )
         frame = rod.frame_from_quaternion(tip[3:7])
         return r, jac, jac_solver, k_solver, dr_dload, focal, gradient_map, tip[0:3], frame
