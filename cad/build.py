@@ -6,7 +6,7 @@
     stl/<part>.stl             one STL per printed part, in its print orientation
     plate_<process>_<k>.3mf    print plate(s) with every copy of every printed part
     checks.csv                 the printability and fit table (cad.checks)
-    parts.csv                  parts list: quantity, volume, mass, size
+    parts.csv                  parts list: quantity, material, volume, mass, size, file
     cad_summary.json           tracking groove, self-locking and gear numbers, timings
     renders/...png             each part, assembly, actuator, exploded, tip
 
@@ -47,6 +47,8 @@ from design.atomic import write_text
 from design.records import Design
 from design.units import GRAM, MM3
 
+STEP_FILE = "ringpair_robot.step"
+
 
 @dataclass
 class CadReport:
@@ -57,8 +59,8 @@ class CadReport:
     files : Every file written.
     checks : The check table, one dict per row (``item, check, value, limit, unit, passed,
         note``).
-    parts : Parts list, one dict per part (``name, quantity, printed, volume_mm3, mass_g,
-        size_mm, description``).
+    parts : Parts list, one dict per part (``name, quantity, printed, material,
+        volume_mm3, mass_g, size_mm, file, description``).
     tracking : Groove pitch, travel, resolution [deg/mm] and range [deg] per piece.
     self_locking : The worm drives' self-locking numbers.
     drive : Gear numbers (module, teeth, ratio, lead angle, centre distance, ...).
@@ -134,21 +136,57 @@ def part_meshes(assembly: RobotAssembly, process: PrintProcess) -> dict[str, Par
     return out
 
 
-def _parts_table(assembly: RobotAssembly, process: PrintProcess) -> list[dict[str, object]]:
+PARTS_COLUMNS = (
+    "part",
+    "quantity",
+    "printed",
+    "material",
+    "volume_mm3",
+    "mass_g",
+    "size_x_mm",
+    "size_y_mm",
+    "size_z_mm",
+    "file",
+    "description",
+)
+"""Columns of ``parts.csv``: one row per distinct part; volume and mass of one piece;
+size = bounding box in the part's print frame (bought parts: their own frame); file =
+where its geometry is, relative to the CAD folder."""
+
+
+def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
+    """Bought part -> (material, density [kg/m^3]) from the design file."""
+    return {
+        "ring_magnet": (f"magnet, remanence {design.tip.remanence:g} T", design.tip.density),
+        "catheter": ("catheter tube", design.robot.catheter.density),
+        "wire": ("wire", design.robot.wire.density),
+    }
+
+
+def _parts_table(
+    assembly: RobotAssembly, process: PrintProcess, design: Design, meshes: dict[str, PartMesh]
+) -> list[dict[str, object]]:
+    """One dict per part: name, quantity, printed, material, volume_mm3 [mm^3], mass_g [g]
+    (one piece, 4 significant digits; printed parts at the process material's density,
+    bought ones at the design's), size_mm (bounding box x, y, z of its exported mesh: OCC's
+    box of a curved solid can be loose by tenths of a mm) [mm], file, description."""
+    bought = _bought_materials(design)
     rows = []
     for name, part in assembly.parts.items():
-        bb = part.solid.BoundingBox()
+        size = np.ptp(np.asarray(meshes[name].vertices), axis=0)
         volume = part.solid.Volume()
+        printed = (f"{process.material}, {process.name} print", process.material_density_kg_m3)
+        material, density = printed if part.printed else bought[name]
         rows.append(
             {
                 "name": name,
                 "quantity": part.quantity,
                 "printed": part.printed,
+                "material": material,
                 "volume_mm3": round(volume, 3),
-                "mass_g": round(volume * MM3 * process.material_density_kg_m3 / GRAM, 4)
-                if part.printed
-                else None,
-                "size_mm": [round(bb.xlen, 3), round(bb.ylen, 3), round(bb.zlen, 3)],
+                "mass_g": float(f"{volume * MM3 * density / GRAM:.4g}"),
+                "size_mm": [round(float(s), 3) for s in size],
+                "file": f"stl/{name}.stl" if part.printed else STEP_FILE,
                 "description": part.description,
             }
         )
@@ -157,11 +195,14 @@ def _parts_table(assembly: RobotAssembly, process: PrintProcess) -> list[dict[st
 
 def _write_parts_csv(rows: list[dict[str, object]], path: Path) -> Path:
     buf = io.StringIO()
-    cols = ["name", "quantity", "printed", "volume_mm3", "mass_g", "size_mm", "description"]
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=PARTS_COLUMNS, lineterminator="\n")
     w.writeheader()
     for r in rows:
-        w.writerow({**r, "size_mm": " x ".join(f"{s:g}" for s in r["size_mm"])})  # type: ignore[attr-defined]
+        x, y, z = r["size_mm"]  # type: ignore[misc]
+        w.writerow(
+            {c: r[c] for c in PARTS_COLUMNS if c in r}
+            | {"part": r["name"], "size_x_mm": x, "size_y_mm": y, "size_z_mm": z}
+        )
     write_text(path, buf.getvalue())
     return path
 
@@ -187,7 +228,10 @@ def build_parts(
     material_pair : Worm/wheel material pair for the self-locking check.
     render : Also write the PNG renders.
 
-    Raises :class:`~cad.errors.CadError` (a ValueError) for impossible dimensions.
+    Raises
+    ------
+    CadError
+        (a ValueError, :class:`~cad.errors.CadError`) for impossible dimensions.
     """
     proc = get_process(process)
     out = Path(out_dir)
@@ -205,7 +249,7 @@ def build_parts(
     printed = [m for n, m in meshes.items() if assembly.parts[n].printed]
     stl_paths = {m.name: export_stl(m, out / "stl" / f"{m.name}.stl") for m in printed}
     report.files += list(stl_paths.values())
-    report.files.append(export_step(assembly, out / "ringpair_robot.step"))
+    report.files.append(export_step(assembly, out / STEP_FILE))
     for k, plate in enumerate(arrange_plates(printed, proc), start=1):
         report.files.append(export_3mf(meshes, plate, out / f"plate_{proc.name}_{k}.3mf"))
     t2 = time.perf_counter()
@@ -227,7 +271,7 @@ def build_parts(
     rows += gear_checks(assembly, interference)
     report.checks = rows_as_dicts(rows)
     report.files.append(write_csv(rows, out / "checks.csv"))
-    report.parts = _parts_table(assembly, proc)
+    report.parts = _parts_table(assembly, proc, design, meshes)
     report.files.append(_write_parts_csv(report.parts, out / "parts.csv"))
     t3 = time.perf_counter()
 

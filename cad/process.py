@@ -31,6 +31,7 @@ class PrintProcess:
     running_clearance_mm : Diametral clearance between parts that turn on each other. [mm]
     backlash_mm : Circular backlash of a gear mesh, at the pitch circle. [mm]
     build_volume_mm : Usable build volume x, y, z. [mm]
+    material : The printed material, for the parts list.
     material_density_kg_m3 : Density of the printed material, for part masses. [kg/m^3]
     linear_deflection_mm : Chord tolerance of the exported meshes. [mm]
     angular_deflection_rad : Angular tolerance of the exported meshes. [rad]
@@ -43,6 +44,7 @@ class PrintProcess:
     running_clearance_mm: float
     backlash_mm: float
     build_volume_mm: tuple[float, float, float]
+    material: str
     material_density_kg_m3: float
     linear_deflection_mm: float = 0.02
     angular_deflection_rad: float = 0.3
@@ -63,7 +65,8 @@ FDM = PrintProcess(
     running_clearance_mm=0.3,
     backlash_mm=0.2,
     build_volume_mm=(250.0, 210.0, 220.0),
-    material_density_kg_m3=1240.0,  # PLA
+    material="PLA",
+    material_density_kg_m3=1240.0,
 )
 
 # Resin (SLA/MSLA): supported walls down to about 0.4 mm; Formlabs Form 3+ build volume
@@ -76,7 +79,8 @@ RESIN = PrintProcess(
     running_clearance_mm=0.1,
     backlash_mm=0.1,
     build_volume_mm=(145.0, 145.0, 185.0),
-    material_density_kg_m3=1180.0,  # typical standard photopolymer resin
+    material="photopolymer",
+    material_density_kg_m3=1180.0,  # typical standard resin
 )
 
 PROCESSES: dict[str, PrintProcess] = {p.name: p for p in (FDM, RESIN)}
