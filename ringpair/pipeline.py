@@ -15,6 +15,12 @@ Stages (each a function of the study and earlier stages' results, timed, cached 
 7. ``cad``: parts, checks and renders of the chosen design (:func:`cad.build_parts`);
 8. ``diagnosis``: of measured data, when given.
 
+Besides each stage's files the run writes the hand-off: ``best_design.toml`` (the
+recommended design as a design file, read back by ``ringpair simulate`` and
+:func:`design.designfile.load_design`) and ``pareto/pareto_<quantity>.csv`` (each front,
+file units, with # lines saying what the columns mean); the CAD stage writes the parts
+list ``cad/parts.csv``.
+
 SI units inside; the report and the manifest say their units.
 """
 
@@ -30,19 +36,24 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from design.atomic import atomic_path, write_text
+from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, index
+from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import Study
-from ringpair.tables import effect_shifts
+from ringpair.tables import effect_shifts, pareto_header, pareto_rows, write_rows
+
+if TYPE_CHECKING:
+    from optimize.sizing.pareto import ParetoResult
 
 TOLERANCES = {n: p.tolerance for n, p in PARAMETERS.items() if p.tolerance is not None}
 """Manufacturing and placement tolerances of the Monte Carlo (one sigma), parameter ->
@@ -58,7 +69,33 @@ TOLERANCE_LOOP = 120
 """Parallel-ring loop samples per Monte Carlo sample: the polygon's inscribed disc is then
 within r (1 - cos(pi / 120)) ~ 0.01 mm of the loop's for a 27 mm disc."""
 
-Say = Callable[[str], None]
+BEST_DESIGN = "best_design.toml"
+"""The recommended design's file, in the study's output folder."""
+
+
+class Watch(Protocol):
+    """Who watches the stages run (the command's progress display)."""
+
+    def start(self, what: str) -> None:
+        """A stage starts; ``what`` says what it does."""
+
+    def count(self, done: int, total: int) -> None:
+        """Of the running stage's ``total`` pieces of work, ``done`` are finished."""
+
+    def end(self, what: str, seconds: float, reused: bool) -> None:
+        """The stage ended after ``seconds`` [s] (reused: read back from an earlier run,
+        ``seconds`` then being what it took when it ran)."""
+
+
+class _Unwatched:
+    def start(self, what: str) -> None:
+        pass
+
+    def count(self, done: int, total: int) -> None:
+        pass
+
+    def end(self, what: str, seconds: float, reused: bool) -> None:
+        pass
 
 
 class StageError(RuntimeError):
@@ -85,11 +122,14 @@ def _key(*parts: object) -> str:
     return hashlib.sha256(pickle.dumps(parts, protocol=4)).hexdigest()[:20]
 
 
-def _stage(run: Run, name: str, inputs: tuple, work: Callable[[], Any]) -> Any:
+def _stage(
+    run: Run, name: str, what: str, inputs: tuple, work: Callable[[], Any], watch: Watch
+) -> Any:
     """Run one stage, or reuse its stored result for the same inputs and the same code
     (the key includes the git commit); a reused stage reports the seconds it took."""
     code = versions().get("ringpair_commit", "unknown")
     store = run.out / ".stages" / f"{name}-{_key(name, code, *inputs)}.pkl"
+    watch.start(what)
     if store.exists():
         with store.open("rb") as f:
             result, seconds = pickle.load(f)
@@ -106,6 +146,7 @@ def _stage(run: Run, name: str, inputs: tuple, work: Callable[[], Any]) -> Any:
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
+    watch.end(what, seconds, run.reused[name])
     return result
 
 
@@ -184,64 +225,118 @@ def run_study(
     seed: int = 0,
     cad_process: str = "fdm",
     render: bool = True,
-    say: Say | None = None,
+    watch: Watch | None = None,
 ) -> Run:
-    """Every stage of the main job; StageError names a failing stage (earlier stages'
-    outputs stay valid on disk)."""
+    """Every stage of the main job, and the hand-off files as soon as their stage is done
+    (:data:`BEST_DESIGN`, the Pareto CSVs); StageError names a failing stage (earlier
+    stages' outputs stay valid on disk).
+
+    cad_process : print process of the parts (:data:`cad.process.PROCESSES`).
+    watch : told when each stage starts and ends (default: nobody).
+    """
     from cad import build_parts
     from optimize.sizing.nlp import optimize_design
     from optimize.sizing.pareto import run_sweeps
 
-    tell = say or (lambda _: None)
+    w = watch or _Unwatched()
     run = Run(out, study)
     model = RingPairModel(study.effects)
     key = (study_text,)
-    tell("baseline workspace of the starting design")
-    _stage(run, "baseline", key, lambda: sweep_workspace(study.base, model=model))
-    tell("optimisation (IPOPT, multi-start)")
-    best = _stage(run, "optimise", key, lambda: optimize_design(study))
+    what = "workspace of the starting design"
+    _stage(run, "baseline", what, key, lambda: sweep_workspace(study.base, model=model), w)
+    what = "optimisation (IPOPT, multi-start)"
+    best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
         raise StageError("optimise", "the study is infeasible: " + best.report())
     chosen: Design = best.design
+    save_design(chosen, out / BEST_DESIGN)
     if study.pareto:
-        tell("Pareto sweeps on Dask")
-        _stage(
+        pareto = _stage(
             run,
             "pareto",
+            "Pareto sweeps on Dask",
             key,
-            lambda: run_sweeps(study, out / "pareto", scheduler=scheduler, workers=workers),
+            lambda: run_sweeps(
+                study, out / "pareto", scheduler=scheduler, workers=workers, progress=w.count
+            ),
+            w,
         )
+        write_pareto_csvs(pareto, study, out / "pareto")
     faithful = RingPairModel(DEFAULT_EFFECTS)
-    tell("forward re-simulation with the model for design work")
     _stage(
         run,
         "forward",
+        "forward re-simulation with the model for design work",
         key,
         lambda: {
             "start": sweep_workspace(study.base, model=faithful),
             "best": sweep_workspace(chosen, model=faithful),
         },
+        w,
     )
-    tell(f"tolerance Monte Carlo ({samples} samples)")
     _stage(
         run,
         "tolerance",
+        f"tolerance Monte Carlo ({samples} samples)",
         (*key, samples, seed),
         lambda: tolerance_spread(chosen, samples, seed, faithful),
+        w,
     )
-    tell("how much each model effect matters")
-    _stage(run, "effects", key, lambda: effect_shifts(chosen, EFFECTS_PATH, np.zeros(1))[0])
-    tell("CAD: parts, checks, renders")
+    _stage(
+        run,
+        "effects",
+        "how much each model effect matters",
+        key,
+        lambda: effect_shifts(chosen, EFFECTS_PATH, np.zeros(1))[0],
+        w,
+    )
     _stage(
         run,
         "cad",
+        f"CAD of the recommended design ({BEST_DESIGN}), {cad_process} print: parts, checks"
+        + (", renders" if render else ""),
         (*key, cad_process, render),
         lambda: _cad_summary(build_parts(chosen, out / "cad", cad_process, render=render)),
+        w,
     )
     if data is not None:
-        tell("diagnosis of the measured data")
-        _stage(run, "diagnosis", (*key, _tree_hash(data)), lambda: _diagnose(data))
+        _stage(
+            run,
+            "diagnosis",
+            "diagnosis of the measured data",
+            (*key, _tree_hash(data)),
+            lambda: _diagnose(data),
+            w,
+        )
     return run
+
+
+def write_pareto_csvs(pareto: ParetoResult, study: Study, folder: Path) -> list[Path]:
+    """``pareto_<quantity>.csv`` in ``folder`` for each sweep of a ParetoResult (file
+    units, # lines saying what each column means); the paths."""
+    paths = []
+    for against, points in pareto.sweeps.items():
+        path = folder / f"pareto_{against}.csv"
+        write_rows(path, pareto_rows(points, study), pareto_header(against, study))
+        paths.append(path)
+    return paths
+
+
+def headline(run: Run) -> str:
+    """The result in one paragraph: the recommended design's disc radius under the model
+    for design work against the start's, and where its design file and parts are."""
+    fwd = run.results["forward"]
+    start, best = fwd["start"].disc_radius / MM, fwd["best"].disc_radius / MM
+    materials = [m for m in run.results["optimise"].materials if m]
+    made = f" ({', '.join(materials)})" if materials else ""
+    cad = run.results.get("cad")
+    parts = f"; parts for it in {Path(cad['out_dir'])} (list: parts.csv)" if cad is not None else ""
+    return (
+        f"Recommended design{made}: disc radius {best:.2f} mm with the model for design work "
+        f"({', '.join(sorted(DEFAULT_EFFECTS))}), against {start:.2f} mm for the starting "
+        f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
+        f"Design file: {run.out / BEST_DESIGN}{parts}."
+    )
 
 
 def _cad_summary(report: Any) -> dict[str, Any]:
@@ -306,4 +401,15 @@ def write_manifest(
     return path
 
 
-__all__ = ["TOLERANCES", "Run", "StageError", "Workspace", "run_study", "write_manifest"]
+__all__ = [
+    "BEST_DESIGN",
+    "TOLERANCES",
+    "Run",
+    "StageError",
+    "Watch",
+    "Workspace",
+    "headline",
+    "run_study",
+    "write_manifest",
+    "write_pareto_csvs",
+]

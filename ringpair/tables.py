@@ -188,9 +188,34 @@ def _file_units(values: dict[str, float]) -> dict[str, float]:
     return {spec[k].key: v / spec[k].scale for k, v in values.items()}
 
 
-def write_rows(path: str | os.PathLike[str], rows: list[dict[str, object]]) -> None:
-    """Write rows atomically as they are (Python's str of each cell), every key a column."""
-    _write(path, rows, list(dict.fromkeys(k for r in rows for k in r)))
+def pareto_header(against: str, study: Study) -> str:
+    """What a Pareto CSV's columns mean and their units, for its # lines."""
+    from optimize.sizing.studyfile import PARETO_QUANTITIES
+
+    _, label = PARETO_UNITS[against]
+    sense = "at most" if PARETO_QUANTITIES[against][2] == "max" else "at least"
+    single = len(study.objective) == 1
+    objective = (
+        "disc radius [mm]"
+        if single and study.objective[0][0] == "disc_radius"
+        else (f"{study.objective[0][0]} [SI]" if single else "weighted objective [-]")
+    )
+    return (
+        f"Pareto sweep of study '{study.name}': one design NLP per row, {label} {sense} "
+        "epsilon, the objective maximised.\n"
+        f"epsilon: the bound, {label}; objective: {objective}; feasible: whether the NLP "
+        "found a design; active: the constraints and bounds that hold it (';'-separated); "
+        "error: why a point failed; the other columns: the free quantities, in the study "
+        "file's units (as the key names say)."
+    )
+
+
+def write_rows(
+    path: str | os.PathLike[str], rows: list[dict[str, object]], header: str = ""
+) -> None:
+    """Write rows atomically as they are (Python's str of each cell), every key a column,
+    under ``header`` (as # lines)."""
+    _write(path, rows, list(dict.fromkeys(k for r in rows for k in r)), header)
 
 
 def _write(

@@ -1,13 +1,27 @@
 """``ringpair study``: the main job, from a study file to the report (see
-:mod:`ringpair.pipeline`)."""
+:mod:`ringpair.pipeline`). While it runs, each stage is a live line on stderr (a terminal
+only); when a stage ends, one line on stdout says how long it took; the run ends with the
+result."""
 
 from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
+from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    SpinnerColumn,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
 
 from ringpair.options import (
     OVERWRITE_POLICY,
@@ -21,12 +35,67 @@ from ringpair.options import (
     output_path,
     path_option,
     print_error,
-    progress,
     study_from,
 )
 
-FILES = ("report.html", "results.json", "manifest.json")
+FILES = ("report.html", "results.json", "manifest.json", "best_design.toml")
 """What ``study`` writes in its folder besides each stage's files."""
+REPORT = "report: page, figures, PDF"
+
+
+class _Stages:
+    """The stages as the user sees them: a live line per running stage (spinner, bar,
+    pieces done, elapsed time) on ``bar``, and when it ends one line with its duration."""
+
+    def __init__(self, bar: Progress) -> None:
+        self.bar = bar
+        self.task: TaskID | None = None
+
+    def start(self, what: str) -> None:
+        self.task = self.bar.add_task(escape(what), total=None)
+
+    def count(self, done: int, total: int) -> None:
+        if self.task is not None:
+            self.bar.update(self.task, completed=done, total=total)
+
+    def end(self, what: str, seconds: float, reused: bool) -> None:
+        if self.task is not None:
+            self.bar.remove_task(self.task)
+            self.task = None
+        took = f"reused (it took {seconds:.1f} s)" if reused else f"{seconds:.1f} s"
+        console.print(f"{what}: {took}", highlight=False, soft_wrap=True)
+
+
+@contextmanager
+def _stages() -> Iterator[_Stages]:
+    """A :class:`_Stages` whose live lines show only where stderr is a terminal."""
+    columns = (
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+    )
+    live = err_console.is_terminal
+    with Progress(
+        *columns,
+        console=err_console,
+        transient=True,
+        disable=not live,
+        redirect_stdout=live and console.is_terminal,
+        redirect_stderr=False,
+    ) as bar:
+        yield _Stages(bar)
+
+
+def _process(name: str) -> str:
+    """``name`` if it is a print process CAD knows (cad.process.PROCESSES), else UserError."""
+    from cad.process import PROCESSES
+
+    if name not in PROCESSES:
+        known = ", ".join(repr(p) for p in PROCESSES)
+        raise UserError(f"--process must be one of {known}; got {name!r}")
+    return name
 
 
 @click.command()
@@ -34,7 +103,8 @@ FILES = ("report.html", "results.json", "manifest.json")
 @path_option("--out", help="Output directory. Default: outputs/<study name>. " + OVERWRITE_POLICY)
 @path_option(
     "--data",
-    help="Measured data set (folder with design.toml and measurements.csv) to diagnose.",
+    help="Measured data set (folder with design.toml and measurements.csv, docs/formats.md) "
+    "to diagnose.",
 )
 @click.option("--samples", default=200, show_default=True, help="Tolerance Monte Carlo samples.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the Monte Carlo.")
@@ -46,6 +116,13 @@ FILES = ("report.html", "results.json", "manifest.json")
     help="Local Dask workers.",
 )
 @SCHEDULER
+@click.option(
+    "--process",
+    default="fdm",
+    show_default=True,
+    help="Print process of the parts: 'fdm' or 'resin' (fit allowances, clearances, "
+    "minimum wall, build volume, material).",
+)
 @click.option("--no-render", is_flag=True, help="Skip the part renders (faster).")
 def study(
     study_path: Path | None,
@@ -55,17 +132,22 @@ def study(
     seed: int,
     workers: int,
     scheduler: str | None,
+    process: str,
     no_render: bool,
 ) -> None:
     """Run STUDY (default: the embedded demonstrator study) through every stage: starting
     workspace, optimisation, Pareto sweeps (Dask), forward re-simulation with the model for
-    design work, tolerance Monte Carlo, model effects, CAD and (with --data) diagnosis.
-    Writes report.html (self-contained), results.json, manifest.json and each stage's
-    files. Finished stages are reused when rerun with the same inputs.
+    design work, tolerance Monte Carlo, model effects, CAD of the recommended design and
+    (with --data) diagnosis.
+
+    Writes report.html (self-contained), results.json, manifest.json, the hand-off
+    (best_design.toml, a design file of the recommended design; pareto/pareto_<quantity>.csv;
+    cad/parts.csv with the parts' STL and STEP files) and each stage's files. Finished
+    stages are reused when rerun with the same inputs. File formats: docs/formats.md.
 
     Exit codes: 0 done; 2 bad input; 3 a stage failed (named, with what was written).
     """
-    from ringpair.pipeline import StageError, run_study, write_manifest
+    from ringpair.pipeline import StageError, headline, run_study, write_manifest
     from ringpair.report_html import write_report
 
     with bad_input(OSError, UnicodeDecodeError):
@@ -75,18 +157,14 @@ def study(
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
     if samples < 2:
         raise UserError(f"--samples must be at least 2; got {samples}")
+    process = _process(process)
     out = output_path(
         out or default_out(s.name), "--out", folder=True, typed=out is not None, files=FILES
     )
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     try:
-        with progress("starting") as update:
-
-            def say(stage: str) -> None:
-                update(description=stage)
-                console.print(f"{time.perf_counter() - t0:6.1f} s {stage}")
-
+        with _stages() as stages:
             run = run_study(
                 s,
                 out,
@@ -96,11 +174,14 @@ def study(
                 scheduler=scheduler,
                 samples=samples,
                 seed=seed,
+                cad_process=process,
                 render=not no_render,
-                say=say,
+                watch=stages,
             )
-            say("report")
+            stages.start(REPORT)
+            t1 = time.perf_counter()
             written = write_report(run)
+            stages.end(REPORT, time.perf_counter() - t1, False)
     except StageError as exc:
         print_error(str(exc))
         if exc.run is not None:
@@ -111,10 +192,9 @@ def study(
             )
         sys.exit(3)
     manifest = write_manifest(run, study_path, data, seed)
-    for name, sec in run.seconds.items():
-        console.print(f"  {name:10s} {sec:7.1f} s" + ("  (reused)" if run.reused[name] else ""))
     pdf = [str(p) for p in written if p.suffix == ".pdf"] or [
         "no PDF (headless Chromium, Debian package 'chromium', is not installed)"
     ]
-    console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}, {pdf[0]}")
+    console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}, {pdf[0]}", soft_wrap=True)
     console.print(f"done in {time.perf_counter() - t0:.1f} s")
+    console.print(headline(run), highlight=False, soft_wrap=True)

@@ -1,10 +1,13 @@
-"""``ringpair study``: a small study through every stage, the report, the manifest, reuse."""
+"""``ringpair study``: a small study through every stage, the report, the manifest, reuse,
+the hand-off (design file, Pareto CSVs, parts list, --process) and what the console says."""
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import re
+import shutil
 
 import numpy as np
 import pytest
@@ -12,6 +15,12 @@ import trimesh
 from click.testing import CliRunner
 from PIL import Image
 
+from cad.build import PARTS_COLUMNS
+from cad.checks import load_stl
+from cad.process import FDM, RESIN
+from design.designfile import design_to_dict, load_design
+from optimize.sizing.nlp import optimize_design, pareto_values
+from optimize.sizing.studyfile import load_study
 from ringpair import report_html
 from ringpair.cli import cli
 
@@ -125,3 +134,121 @@ def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
     # Text and embedded figures drew: dark pixels and coloured (plot) pixels both present.
     assert (img.mean(axis=2) < 100).mean() > 0.002
     assert (np.ptp(img, axis=2) > 60).mean() > 0.002
+
+
+def _numbers(doc: dict, prefix: str = "") -> dict[str, float]:
+    """Every number of a design-file document, by its dotted key (vectors by index)."""
+    out: dict[str, float] = {}
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            out |= _numbers(v, f"{prefix}{k}.")
+        elif isinstance(v, list):
+            out |= {f"{prefix}{k}.{i}": float(x) for i, x in enumerate(v)}
+        elif isinstance(v, int | float) and not isinstance(v, bool):
+            out[f"{prefix}{k}"] = float(v)
+    return out
+
+
+def _rows(path):
+    """A CSV's rows, its # lines skipped, and those # lines."""
+    lines = path.read_text().splitlines()
+    notes = [ln for ln in lines if ln.startswith("#")]
+    return list(csv.DictReader(ln for ln in lines if not ln.startswith("#"))), notes
+
+
+def test_best_design_file_reads_back_as_the_optimum_and_simulates(study_run, tmp_path):
+    path, out, first, _ = study_run
+    assert first.exit_code == 0, first.output
+    optimum = optimize_design(load_study(path)).design  # the same NLP, solved again here
+    loaded = load_design(out / "best_design.toml")
+    want, got = _numbers(design_to_dict(optimum)), _numbers(design_to_dict(loaded))
+    assert got.keys() == want.keys()
+    assert got == pytest.approx(want, rel=1e-9, abs=1e-12)
+    csv_out = tmp_path / "pose.csv"
+    args = ["simulate", str(out / "best_design.toml"), "--theta1", "0,90", "--theta2", "0"]
+    simulated = CliRunner().invoke(cli, [*args, "--out", str(csv_out)])
+    assert simulated.exit_code == 0, simulated.output
+    rows, _ = _rows(csv_out)
+    assert len(rows) == 2 and all(r["stable"] == "true" for r in rows)
+
+
+def test_pareto_csv_says_its_units_and_holds_every_point(study_run):
+    path, out, _, _ = study_run
+    rows, notes = _rows(out / "pareto" / "pareto_external_distance.csv")
+    assert any("external-magnet distance [mm]" in n for n in notes)
+    assert any("disc radius [mm]" in n for n in notes)
+    study = load_study(path)
+    bounds_mm = pareto_values(study, study.pareto[0]) * 1e3
+    assert [float(r["epsilon"]) for r in rows] == pytest.approx(bounds_mm)
+    for r in rows:
+        assert r["feasible"] == "True", r
+        # a lower bound on the distance: every point keeps its magnet at least that far
+        assert float(r["external_distance_mm"]) >= float(r["epsilon"]) - 1e-4
+        assert 0 < float(r["objective"]) < 100  # a disc radius in mm, not in m
+    radii = [float(r["objective"]) for r in rows]
+    assert radii == sorted(radii, reverse=True)  # farther magnet, smaller disc
+
+
+def test_parts_list_names_material_mass_size_and_file(study_run):
+    _, out, _, _ = study_run
+    rows, _ = _rows(out / "cad" / "parts.csv")
+    assert tuple(rows[0]) == PARTS_COLUMNS
+    printed = [r for r in rows if r["printed"] == "True"]
+    assert printed and all(r["material"] == "PLA, fdm print" for r in printed)
+    for r in printed:
+        mesh = load_stl(out / "cad" / r["file"])  # the file it names, read back
+        assert mesh.volume == pytest.approx(float(r["volume_mm3"]), rel=0.01), r["part"]
+        mass = float(r["volume_mm3"]) * 1e-9 * FDM.material_density_kg_m3 * 1e3
+        assert float(r["mass_g"]) == pytest.approx(mass, rel=1e-3), r["part"]
+        size = sorted(float(r[f"size_{a}_mm"]) for a in "xyz")
+        assert size == pytest.approx(sorted(np.ptp(mesh.vertices, axis=0)), abs=0.05), r["part"]
+    ring = next(r for r in rows if r["part"] == "ring_magnet")
+    design = load_design(out / "best_design.toml")
+    assert float(ring["mass_g"]) == pytest.approx(
+        float(ring["volume_mm3"]) * 1e-9 * design.tip.density * 1e3, rel=1e-3
+    )
+    assert ring["file"] == "ringpair_robot.step" and (out / "cad" / ring["file"]).is_file()
+
+
+def test_console_says_each_stage_duration_what_the_parts_are_for_and_the_result(study_run):
+    _, out, first, second = study_run
+    text = first.stdout
+    for stage in ("optimisation", "Pareto sweeps", "tolerance Monte Carlo", "report"):
+        assert re.search(rf"^{stage}.*: \d+\.\d s$", text, re.M), stage
+    assert "CAD of the recommended design (best_design.toml), fdm print" in text
+    doc = json.loads((out / "results.json").read_text())
+    best, start = (doc["forward"][f"{k}_disc_radius_mm"] for k in ("best", "start"))
+    last = text.strip().splitlines()[-1]
+    assert last.startswith("Recommended design")
+    assert f"disc radius {best:.2f} mm" in last and f"against {start:.2f} mm" in last
+    assert f"{best - start:+.2f} mm" in last and str(out / "best_design.toml") in last
+    assert re.search(r": reused \(it took \d+\.\d s\)$", second.stdout, re.M)
+    for output in (first.output, second.output):  # not a terminal: plain text only
+        assert "\x1b[" not in output and "X server" not in output
+
+
+def test_process_resin_builds_resin_parts(study_run, tmp_path):
+    _, out, _, _ = study_run
+    copy = tmp_path / "out"
+    shutil.copytree(out, copy)  # every stage but the CAD is reused
+    args = ["study", str(study_run[0]), "--out", str(copy), "--samples", "20", "--seed", "3"]
+    result = CliRunner().invoke(cli, [*args, "--process", "resin", "--no-render"])
+    assert result.exit_code == 0, result.output
+    assert "resin print" in result.stdout
+    rows, _ = _rows(copy / "cad" / "parts.csv")
+    printed = [r for r in rows if r["printed"] == "True"]
+    assert {r["material"] for r in printed} == {f"{RESIN.material}, resin print"}
+    assert any((copy / "cad").glob("plate_resin_*.3mf"))
+    manifest = json.loads((copy / "manifest.json").read_text())
+    assert not manifest["stages"]["cad"]["reused"] and manifest["stages"]["optimise"]["reused"]
+
+
+def test_unknown_process_is_exit_2_and_writes_nothing(tmp_path, pareto_study):
+    path = tmp_path / "s.toml"
+    path.write_text(pareto_study)
+    result = CliRunner().invoke(
+        cli, ["study", str(path), "--out", str(tmp_path / "o"), "--process", "sls"]
+    )
+    assert result.exit_code == 2
+    assert "--process must be one of 'fdm', 'resin'; got 'sls'" in result.output
+    assert len(result.output.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
