@@ -50,7 +50,7 @@ def cli() -> None:
     Two diametrically magnetised rings at the tip, each turned by its own coaxial element
     (inner wire: distal ring, theta1; outer catheter: proximal ring, theta2), steer the tip
     in the fixed field of an external magnet. Every command takes a design file
-    (spec/formats.md) and defaults to the paper's demonstrator. Angles are in degrees,
+    (docs/formats.md) and defaults to the paper's demonstrator. Angles are in degrees,
     lengths in millimetres; base frame: origin at the clamp, x along the straight robot.
     """
 

@@ -92,7 +92,7 @@ def bad_input(*errors: type[Exception], prefix: str = "") -> Iterator[None]:
 # Arguments and options taken by several commands.
 
 DESIGN = click.argument("design", required=False, type=click.Path(path_type=Path))
-"""DESIGN: a design file (TOML, spec/formats.md); absent, the paper's demonstrator."""
+"""DESIGN: a design file (TOML, docs/formats.md); absent, the paper's demonstrator."""
 
 STUDY = click.argument(
     "study_path", metavar="[STUDY]", required=False, type=click.Path(path_type=Path)
@@ -100,7 +100,7 @@ STUDY = click.argument(
 """STUDY: a study file (TOML); absent, the embedded demonstrator study."""
 
 DATA = click.argument("data", type=click.Path(path_type=Path))
-"""DATA: measured data, a data-set folder or a CSV (spec/formats.md)."""
+"""DATA: measured data, a data-set folder or a CSV (docs/formats.md)."""
 
 CSV_DESIGN = click.option(
     "--design",

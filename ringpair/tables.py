@@ -1,5 +1,5 @@
 """Tables of results and their CSV files: simulated tip poses (columns named as in
-spec/formats.md), the model effects compared, the Pareto points. File units (mm, deg, MPa)."""
+docs/formats.md), the model effects compared, the Pareto points. File units (mm, deg, MPa)."""
 
 from __future__ import annotations
 

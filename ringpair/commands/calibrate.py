@@ -63,7 +63,7 @@ def calibrate(
     json_out: Path | None,
 ) -> None:
     """Fit the model's uncertain physical parameters to measured DATA (a data-set folder
-    or a CSV, spec/formats.md) by least squares with exact Jacobians; print the estimates
+    or a CSV, docs/formats.md) by least squares with exact Jacobians; print the estimates
     with their standard errors, and the RMS and largest tip error."""
     from optimize.fitting.calibrate import FREE_PARAMETERS, default_free
     from optimize.fitting.calibrate import calibrate as fit_parameters

@@ -141,7 +141,7 @@ def synth(
     tip_angles: bool,
     force: bool,
 ) -> None:
-    """Synthetic bench data of DESIGN: a data set (spec/formats.md) to test calibration
+    """Synthetic bench data of DESIGN: a data set (docs/formats.md) to test calibration
     and diagnosis on.
 
     Drives the rings along a bench path with the chosen model effects (and any --set

@@ -1,4 +1,4 @@
-"""Design files (spec/formats.md): the demonstrator, round trips, and one clear message per
+"""Design files (docs/formats.md): the demonstrator, round trips, and one clear message per
 kind of bad value."""
 
 from __future__ import annotations

@@ -92,7 +92,7 @@ def test_spacing_lever_is_the_moment_of_the_distal_force_about_the_tip():
 
 
 def test_ring_angle_convention_follows_spec():
-    # spec/formats.md: on the straight robot theta = 0 is +y and theta = 90 deg is +z.
+    # docs/formats.md: on the straight robot theta = 0 is +y and theta = 90 deg is +z.
     frame = ca.DM.eye(3)
     m0 = np.asarray(ca.evalf(ring_moment_vector(0.0, frame, 1.0))).ravel()
     m90 = np.asarray(ca.evalf(ring_moment_vector(np.pi / 2, frame, 1.0))).ravel()

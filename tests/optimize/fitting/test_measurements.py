@@ -1,4 +1,4 @@
-"""Measured-data CSV and data-set folders (spec/formats.md): every bad file ends in one
+"""Measured-data CSV and data-set folders (docs/formats.md): every bad file ends in one
 message naming the file, line and column, what was expected and what was found; good
 files round-trip."""
 
