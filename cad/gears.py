@@ -49,6 +49,11 @@ class WormDriveSpec:
     addendum_factor: float = 1.0
     dedendum_factor: float = 1.25
 
+    @property
+    def ratio(self) -> float:
+        """Transmission ratio z2 / z1: worm (knob) turns per wheel (ring) turn. [-]"""
+        return self.wheel_teeth / self.worm_starts
+
 
 @dataclass(frozen=True)
 class WormDrive:
@@ -90,7 +95,7 @@ class WormDrive:
     @property
     def ratio(self) -> float:
         """Transmission ratio z2 / z1: worm turns per wheel turn. [-]"""
-        return self.spec.wheel_teeth / self.spec.worm_starts
+        return self.spec.ratio
 
     @property
     def normal_module_mm(self) -> float:

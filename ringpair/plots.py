@@ -18,6 +18,7 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from design.atomic import atomic_path  # noqa: E402
 from design.branches import Branch  # noqa: E402
 from design.equilibrium import Equilibria  # noqa: E402
+from design.paths import PathSchedule  # noqa: E402
 from design.records import Design  # noqa: E402
 from design.units import MM  # noqa: E402
 from design.workspace import Workspace  # noqa: E402
@@ -83,6 +84,44 @@ def plot_projection(
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
+    _save(fig, path)
+
+
+def plot_path(schedule: PathSchedule, path: Path, title: str) -> None:
+    """A steered path: the requested and the driven tip, looking along the base x axis
+    (left), and the schedule of ring angles (right)."""
+    fig, (ax, angles) = plt.subplots(1, 2, figsize=(11, 4.6))
+    want = schedule.points / MM
+    if schedule.closed:
+        want = np.vstack([want, want[:1]])
+    ax.plot(want[:, 0], want[:, 1], "k--", lw=1, label="requested path")
+    driven = schedule.driven[:, 1:] / MM
+    ax.plot(driven[:, 0], driven[:, 1], color=REACH, lw=1.5, label="driven tip (simulated)")
+    tip = schedule.position[:, 1:] / MM
+    ok = schedule.reached & ~schedule.snapped
+    ax.plot(tip[ok, 0], tip[ok, 1], "o", ms=3, color=REACH, label="at the path's points")
+    if (~schedule.reached).any():
+        miss = ~schedule.reached
+        ax.plot(tip[miss, 0], tip[miss, 1], "x", color=LOOP, label="out of reach: closest point")
+    if schedule.snapped.any():
+        ax.plot(*tip[schedule.snapped].T, "s", mfc="none", color=LOOP, label="snapped on the way")
+    ax.plot(want[0, 0], want[0, 1], ">", color="k", ms=8, label="start")
+    ax.set_xlabel("y [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=7)
+    ax.set_title("the tip, looking along the robot (base x axis)", fontsize=9)
+    fig.suptitle(title, fontsize=10)
+    step = np.arange(1, len(schedule.points) + 1)
+    for k, (name, color) in enumerate((("theta1 (wire)", REACH), ("theta2 (catheter)", LOOP))):
+        angles.plot(step, np.rad2deg(schedule.theta[:, k]), ".-", color=color, label=name)
+    angles.set_xlabel("step along the path")
+    angles.set_ylabel("ring angle [deg]")
+    angles.grid(alpha=0.3)
+    angles.legend(fontsize=8)
+    angles.set_title("schedule of ring angles", fontsize=9)
+    fig.tight_layout()
     _save(fig, path)
 
 

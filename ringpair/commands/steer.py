@@ -9,6 +9,10 @@ import click
 import numpy as np
 from rich.table import Table
 
+from cad.layout import ActuatorSpec
+from design.model import RingPairModel
+from design.paths import PathSchedule, circle, ellipse, follow, line, workspace_center
+from design.records import Design
 from design.steering import REACHED, Steering, steer
 from design.units import MM
 from ringpair.options import (
@@ -22,6 +26,7 @@ from ringpair.options import (
     output_path,
     path_option,
 )
+from ringpair.plots import plot_path
 from ringpair.tables import write_csv
 
 MAX_TARGETS = 100_000
@@ -47,6 +52,25 @@ STEER_COLUMNS = (
     "multistable",
     "fold_margin",
 )
+
+
+PATH_COLUMNS = (
+    "step",
+    "target_y_mm",
+    "target_z_mm",
+    "theta1_deg",
+    "theta2_deg",
+    "knob1_turns",
+    "knob2_turns",
+    "y_mm",
+    "z_mm",
+    "error_mm",
+    "reached",
+    "snapped",
+)
+PATH_POINTS = {"circle": 72, "ellipse": 72, "line": 25}
+"""Points along a path unless --points says otherwise."""
+MAX_PATH_POINTS = 2000
 
 
 def parse_target(text: str, where: str) -> tuple[float, float]:
@@ -121,45 +145,86 @@ def steer_rows(result: Steering) -> list[dict]:
     help="A target for the tip: its y and z in mm, base frame (repeat for more).",
 )
 @path_option("--targets", help="CSV of targets, columns y_mm, z_mm.")
-@path_option("--out", help="CSV to write. Default: outputs/<design name>/steer.csv.")
+@click.option(
+    "--path",
+    "path_spec",
+    metavar="SPEC",
+    default=None,
+    help="Drive the tip along a path: circle:R, ellipse:A,B (semi-axes along y and z), "
+    "line:Y1,Z1,Y2,Z2 (mm), or a CSV of points (columns y_mm, z_mm, in order). Writes a "
+    "schedule of ring angles and knob turns, and its plot.",
+)
+@click.option(
+    "--points",
+    type=click.IntRange(2, MAX_PATH_POINTS),
+    default=None,
+    help="Points along a circle, ellipse or line (default 72, 72, 25).",
+)
+@click.option(
+    "--center",
+    metavar="Y,Z",
+    default=None,
+    help="Centre of a circle or ellipse in mm (default: the workspace's centre, the mean "
+    "tip with the rings parallel).",
+)
+@click.option("--closed", is_flag=True, help="A CSV path returns to its first point.")
+@path_option(
+    "--out",
+    help="CSV to write. Default: outputs/<design name>/steer.csv (steer_path.csv with "
+    "--path, and its plot beside it as .png).",
+)
 @effects_option("default")
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
 def steer_command(
     design: Path | None,
     to: tuple[str, ...],
     targets: Path | None,
+    path_spec: str | None,
+    points: int | None,
+    center: str | None,
+    closed: bool,
     out: Path | None,
     effects: str,
     quiet: bool,
 ) -> None:
-    """The ring angles that put the tip of DESIGN at each target (y, z).
+    """The ring angles that put the tip of DESIGN at each target (y, z), or drive it along
+    a path.
 
-    Every pair of ring angles whose state (the stable equilibrium the robot reaches with
-    the rings held there) puts the tip on the target, to 1e-6 mm: the ring pair has
-    several, typically mirror pairs. Each comes with its state's flags, its fold margin
-    (1 for the unloaded robot, 0 at a fold where it snaps: how far from snapping) and the
-    tip tangent. A target out of reach gets the closest reachable point, flagged
-    reached = false, with its distance. CSV columns: target (1-based), target_y_mm,
-    target_z_mm, theta1_deg, theta2_deg, x_mm, y_mm, z_mm, the tip tangent, error_mm,
-    reached, stable, snapped, multistable, fold_margin.
+    Targets (--to, --targets): every pair of ring angles whose state (the stable
+    equilibrium the robot reaches with the rings held there) puts the tip on the target, to
+    1e-6 mm: the ring pair has several, typically mirror pairs. Each comes with its
+    state's flags, its fold margin (1 for the unloaded robot, 0 at a fold where it snaps:
+    how far from snapping) and the tip tangent. A target out of reach gets the closest
+    reachable point, flagged reached = false, with its distance. CSV columns: target
+    (1-based), target_y_mm, target_z_mm, theta1_deg, theta2_deg, x_mm, y_mm, z_mm, the tip
+    tangent, error_mm, reached, stable, snapped, multistable, fold_margin.
+
+    A path (--path): one solution per point, chosen for the smallest total ring rotation
+    without jumps between solution branches, then driven as the robot is (each state
+    continued from the one before, 4 commands between points) to confirm that the tip
+    follows and nothing snaps. CSV columns: step, target_y_mm, target_z_mm, theta1_deg,
+    theta2_deg (continuous along the path), knob1_turns, knob2_turns (turns of the
+    actuator's knobs from the first point: the wire's and the catheter's worm drive), y_mm,
+    z_mm (the driven tip), error_mm, reached, snapped (the move into this point snapped).
     """
     d = design_from(design)
     model = model_from(effects)
-    points = [parse_target(t, "--to") for t in to]
+    if path_spec is not None:
+        if to or targets is not None:
+            raise UserError("--path drives along a path; give it without --to or --targets")
+        _steer_path(d, model, design, path_spec, points, center, closed, out, quiet)
+        return
+    if points is not None or center is not None or closed:
+        raise UserError("--points, --center and --closed belong to --path")
+    wanted = [parse_target(t, "--to") for t in to]
     if targets is not None:
-        points += read_targets(targets)
-    if not points:
-        raise UserError("give a target: --to Y,Z (mm) or --targets FILE.csv")
-    limit = d.robot.free_length / MM
-    far = [p for p in points if np.hypot(*p) > limit]
-    if far:
+        wanted += read_targets(targets)
+    if not wanted:
+        raise UserError("give a target: --to Y,Z (mm), --targets FILE.csv or --path SPEC")
+    _within_reach(d, wanted)
+    if len(wanted) > MAX_TARGETS:
         raise UserError(
-            f"target {far[0][0]:g},{far[0][1]:g} mm is farther from the robot's axis than its "
-            f"free length ({limit:g} mm): no tip can get there (are the units mm?)"
-        )
-    if len(points) > MAX_TARGETS:
-        raise UserError(
-            f"{len(points):,} targets; at most {MAX_TARGETS:,} per run (split the file)"
+            f"{len(wanted):,} targets; at most {MAX_TARGETS:,} per run (split the file)"
         )
     out = output_path(
         out or default_out(d.name, "steer.csv"),
@@ -169,16 +234,192 @@ def steer_command(
         inputs=[design, targets],
     )
     with console.status(
-        f"steering to {len(points)} target(s) (the first run on a machine compiles the model)"
+        f"steering to {len(wanted)} target(s) (the first run on a machine compiles the model)"
     ):
-        result = steer(model, model.parameters(d), np.array(points) * MM)
+        result = steer(model, model.parameters(d), np.array(wanted) * MM)
     rows = steer_rows(result)
     write_csv(
         out, rows, STEER_COLUMNS, header=f"ringpair steer, design '{d.name}', model {model.name}"
     )
     if not quiet:
         _print(rows, f"{d.name}: ring angles for each target ({model.name} model)")
-    console.print(f"wrote {out} ({len(points)} target(s), {len(rows)} row(s))")
+    console.print(f"wrote {out} ({len(wanted)} target(s), {len(rows)} row(s))")
+
+
+def _within_reach(d: Design, wanted: list[tuple[float, float]]) -> None:
+    """Refuse points farther from the robot's axis than its free length (wrong units)."""
+    limit = d.robot.free_length / MM
+    far = [p for p in wanted if np.hypot(*p) > limit]
+    if far:
+        raise UserError(
+            f"target {far[0][0]:g},{far[0][1]:g} mm is farther from the robot's axis than its "
+            f"free length ({limit:g} mm): no tip can get there (are the units mm?)"
+        )
+
+
+def parse_path(
+    spec: str, count: int | None, center: tuple[float, float] | None
+) -> tuple[np.ndarray, bool]:
+    """The points (M, 2) [mm] and closedness of a --path SPEC (circle:R, ellipse:A,B,
+    line:Y1,Z1,Y2,Z2); ``center`` [mm] is needed for circles and ellipses."""
+    kind, _, numbers = spec.partition(":")
+    kind = kind.strip().lower()
+    expected = {"circle": 1, "ellipse": 2, "line": 4}
+    if kind not in expected:
+        raise UserError(
+            f"--path: expected circle:R, ellipse:A,B, line:Y1,Z1,Y2,Z2 or a CSV file, got {spec!r}"
+        )
+    try:
+        values = [float(v) for v in numbers.split(",")]
+    except ValueError:
+        values = []
+    n = expected[kind]
+    if len(values) != n or not np.isfinite(values).all():
+        raise UserError(
+            f"--path {kind}: expected {n} number(s) in mm after '{kind}:', got {spec!r}"
+        )
+    if kind != "line" and min(values) <= 0:
+        raise UserError(f"--path {kind}: radii must be positive (mm), got {spec!r}")
+    if kind == "line" and values[:2] == values[2:]:
+        raise UserError(f"--path line: the two ends are the same point, got {spec!r}")
+    count = count or PATH_POINTS[kind]
+    assert center is not None or kind == "line"
+    if kind == "circle":
+        return circle(values[0], count, center or (0.0, 0.0)), True
+    if kind == "ellipse":
+        return ellipse(values[0], values[1], count, center or (0.0, 0.0)), True
+    return line((values[0], values[1]), (values[2], values[3]), count), False
+
+
+def path_rows(schedule: PathSchedule, ratio: float) -> list[dict]:
+    """One row per path point in file units (mm, deg, knob turns at ``ratio`` knob turns
+    per ring turn)."""
+    knobs = ratio * (schedule.theta - schedule.theta[0]) / (2 * np.pi)
+    return [
+        {
+            "step": k + 1,
+            "target_y_mm": schedule.points[k, 0] / MM,
+            "target_z_mm": schedule.points[k, 1] / MM,
+            "theta1_deg": np.rad2deg(schedule.theta[k, 0]),
+            "theta2_deg": np.rad2deg(schedule.theta[k, 1]),
+            "knob1_turns": knobs[k, 0],
+            "knob2_turns": knobs[k, 1],
+            "y_mm": schedule.position[k, 1] / MM,
+            "z_mm": schedule.position[k, 2] / MM,
+            "error_mm": schedule.error[k] / MM,
+            "reached": bool(schedule.reached[k]),
+            "snapped": bool(schedule.snapped[k]),
+        }
+        for k in range(len(schedule.points))
+    ]
+
+
+def _steer_path(
+    d: Design,
+    model: RingPairModel,
+    design: Path | None,
+    spec: str,
+    count: int | None,
+    center_text: str | None,
+    closed: bool,
+    out: Path | None,
+    quiet: bool,
+) -> None:
+    """``ringpair steer --path``: the schedule, its CSV, its plot and a summary."""
+    csv_path = Path(spec) if Path(spec).suffix.lower() == ".csv" else None
+    if csv_path is not None and (count is not None or center_text is not None):
+        raise UserError("--points and --center shape circles, ellipses and lines, not a CSV path")
+    if csv_path is None and closed:
+        raise UserError("--closed is for a CSV path (circles and ellipses are closed already)")
+    center = parse_target(center_text, "--center") if center_text is not None else None
+    out = output_path(
+        out or default_out(d.name, "steer_path.csv"),
+        "--out",
+        folder=False,
+        typed=out is not None,
+        inputs=[design, csv_path],
+    )
+    params = model.parameters(d)
+    with console.status("steering along the path (the first run on a machine compiles the model)"):
+        if csv_path is not None:
+            wanted = np.array(read_targets(csv_path))
+            if len(wanted) < 2:
+                raise UserError(f"{csv_path}: a path needs at least two points")
+            if len(wanted) > MAX_PATH_POINTS:
+                raise UserError(f"{csv_path}: {len(wanted):,} points; at most {MAX_PATH_POINTS:,}")
+        else:
+            if center is None and not spec.lower().startswith("line"):
+                y, z = workspace_center(model, params)
+                center = (y / MM, z / MM)
+            wanted, closed = parse_path(spec, count, center)
+        _within_reach(d, [tuple(p) for p in wanted])
+        try:
+            schedule = follow(model, params, wanted * MM, closed=closed)
+        except ValueError as exc:
+            raise UserError(f"--path: {exc}") from None
+    ratio = ActuatorSpec().drive.ratio
+    rows = path_rows(schedule, ratio)
+    write_csv(
+        out,
+        rows,
+        PATH_COLUMNS,
+        header=(
+            f"ringpair steer --path {spec}, design '{d.name}', model {model.name}; knob turns "
+            f"at {ratio:g} knob turns per ring turn (the actuator's worm drives), from step 1"
+        ),
+    )
+    picture = out.with_suffix(".png")
+    plot_path(schedule, picture, f"{d.name}: {spec} ({model.name} model)")
+    if not quiet:
+        console.print(_summary(schedule, ratio))
+    console.print(f"wrote {out} ({len(rows)} steps) and {picture}")
+
+
+def _summary(schedule: PathSchedule, ratio: float) -> str:
+    """What the drive along the path gave, in plain sentences."""
+    turns = np.rad2deg(schedule.rotation)
+    knobs = ratio * schedule.rotation / (2 * np.pi)
+    lines = [
+        f"{len(schedule.points)} points; rings turned {turns[0]:.1f} deg (wire) and "
+        f"{turns[1]:.1f} deg (catheter) in all: {knobs[0]:.1f} and {knobs[1]:.1f} knob turns."
+    ]
+    if schedule.followed:
+        lines.append(
+            f"FOLLOWED: the driven tip passes every point (within {np.max(schedule.error) / MM:.1e}"
+            f" mm) and strays at most {schedule.deviation / MM:.3f} mm from the path between "
+            "them; nothing snaps."
+        )
+        return "\n".join(lines)
+    missed = np.flatnonzero(~schedule.reached)
+    if missed.size:
+        lines.append(
+            f"OUT OF REACH: {missed.size} point(s) (steps {_ranges(missed + 1)}); the schedule "
+            f"goes to the closest reachable point instead, up to "
+            f"{np.max(schedule.error[missed]) / MM:.3f} mm away."
+        )
+    snapped = np.flatnonzero(schedule.snapped)
+    if snapped.size:
+        lines.append(
+            f"SNAPS on the way to step(s) {_ranges(snapped + 1)}: no schedule of these "
+            "solutions avoids it."
+        )
+    lines.append(
+        f"The driven tip strays at most {schedule.deviation / MM:.3f} mm from the path; the "
+        f"largest miss at a point is {np.max(schedule.error) / MM:.3f} mm."
+    )
+    return "\n".join(lines)
+
+
+def _ranges(steps: np.ndarray) -> str:
+    """1-based steps as '3-7, 12'."""
+    parts, start = [], int(steps[0])
+    for a, b in zip(steps[:-1], steps[1:], strict=True):
+        if b != a + 1:
+            parts.append(f"{start}" if start == a else f"{start}-{a}")
+            start = int(b)
+    last = int(steps[-1])
+    parts.append(f"{start}" if start == last else f"{start}-{last}")
+    return ", ".join(parts)
 
 
 def _print(rows: list[dict], title: str) -> None:

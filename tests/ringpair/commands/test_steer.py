@@ -59,3 +59,65 @@ def test_steer_refuses_bad_targets_with_one_message(tmp_path, run, args, content
     assert result.exit_code == 2, result.output
     assert message in result.output and "Traceback" not in result.output
     assert not out.exists()
+
+
+def test_steer_path_writes_a_schedule_whose_angles_land_on_the_path(
+    tmp_path, demonstrator, run, read_csv
+):
+    """A circle about the demonstrator's axis (baseline model): every step reached, its
+    angles solved forward land on the point, knob turns are the actuator's 30 knob turns
+    per ring turn (single-start worm, 30-tooth wheel) from step 1, and the plot is
+    written."""
+    out = tmp_path / "p.csv"
+    result = run(
+        "steer", "--effects", "none", "--path", "circle:10", "--points", "24", "--out", str(out)
+    )
+    assert result.exit_code == 0, result.output
+    assert "FOLLOWED" in result.output
+    rows = read_csv(out)
+    assert len(rows) == 24 and all(r["reached"] == "true" for r in rows)
+    theta = np.deg2rad([[float(r["theta1_deg"]), float(r["theta2_deg"])] for r in rows])
+    eq = solve_design(demonstrator, theta[:, 0], theta[:, 1], RingPairModel(frozenset()))
+    phi = 2 * np.pi * np.arange(24) / 24
+    want = 10.0 * np.column_stack([np.cos(phi), np.sin(phi)])  # centred on the axis
+    np.testing.assert_allclose(eq.position[:, 1:] * 1e3, want, atol=1e-4)
+    knobs = np.array([[float(r["knob1_turns"]), float(r["knob2_turns"])] for r in rows])
+    np.testing.assert_allclose(knobs, 30 * (theta - theta[0]) / (2 * np.pi), atol=1e-6)
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_steer_path_reads_a_csv_and_says_what_is_out_of_reach(tmp_path, run, read_csv):
+    path = tmp_path / "path.csv"
+    path.write_text("y_mm,z_mm\n5,0\n15,0\n60,0\n")
+    out = tmp_path / "p.csv"
+    result = run("steer", "--effects", "none", "--path", str(path), "--out", str(out))
+    assert result.exit_code == 0, result.output
+    rows = read_csv(out)
+    assert [r["reached"] for r in rows] == ["true", "true", "false"]
+    assert "OUT OF REACH: 1 point(s) (steps 3)" in " ".join(result.output.split())
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--path", "spiral:3"], "expected circle:R, ellipse:A,B"),
+        (["--path", "circle:-2"], "radii must be positive"),
+        (["--path", "ellipse:3"], "expected 2 number(s)"),
+        (["--path", "line:1,2,x,4"], "expected 4 number(s)"),
+        (["--path", "line:1,2,1,2"], "the two ends are the same point"),
+        (["--path", "circle:400"], "farther from the robot's axis"),
+        (["--path", "circle:5", "--to", "1,2"], "without --to or --targets"),
+        (["--to", "1,2", "--points", "5"], "belong to --path"),
+        (["--path", "circle:5", "--closed"], "--closed is for a CSV path"),
+        (["--path", "{p}"], "at least two points"),
+        (["--path", "circle:5", "--center", "1"], "expected Y,Z in mm"),
+    ],
+)
+def test_steer_path_refuses_bad_paths_with_one_message(tmp_path, run, args, message):
+    p = tmp_path / "one.csv"
+    p.write_text("y_mm,z_mm\n1,2\n")
+    out = tmp_path / "s.csv"
+    result = run("steer", "--effects", "none", *[a.format(p=p) for a in args], "--out", str(out))
+    assert result.exit_code == 2, result.output
+    assert message in " ".join(result.output.split()) and "Traceback" not in result.output
+    assert not out.exists()
