@@ -53,6 +53,41 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
         "".join(f"<li>{html.escape(c.evidence)}</li>" for c in d.causes)
         or "<li>none: the calibrated baseline explains the data</li>"
     )
+    doc = d.to_json()
+
+    def number(value: object, spec: str = ".3f") -> str:
+        return "-" if value is None else format(value, spec)
+
+    tried = table(
+        [
+            "model",
+            "on top of",
+            "RMSE [mm]",
+            "CV RMSE [mm]",
+            "BIC",
+            "BIC change",
+            "params",
+            "verdict",
+        ],
+        [
+            [
+                name,
+                c["on_top_of"],
+                number(c["rmse_mm"]),
+                number(c["cv_rmse_mm"]),
+                number(c["bic"], ".1f"),
+                number(c["bic_change"], "+.1f"),
+                ", ".join(f"{k} {v:.4g}" for k, v in c["params"].items()),
+                c["verdict"],
+            ]
+            for name, c in doc["candidates"].items()
+        ],
+    )
+    power = "".join(
+        f"<li>{html.escape(name)}: {html.escape(str(p['note']))}</li>"
+        for name, p in d.power.items()
+    )
+    power = f"<h2>Power of the data</h2><ul>{power}</ul>" if power else ""
     left = f"<p><b>Not explained:</b> {html.escape(d.unexplained)}</p>" if d.unexplained else ""
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>ringpair diagnosis</title>
@@ -61,8 +96,10 @@ table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 10px;t
 th{{background:#eee}}img{{max-width:100%}}</style></head><body>
 <h1>Diagnosis of {html.escape(m.source)}</h1>
 <p>{len(m)} measured configurations. Cross-validated error ratio final / baseline:
-<b>{d.final.cv_rmse_mm / d.baseline.cv_rmse_mm:.3f}</b>.</p>
+<b>{number(doc["gain"]["cv_rmse_ratio"])}</b>.</p>
 <h2>Causes</h2><ul>{causes}</ul>{left}
+<h2>Every model tried</h2>{tried}
+{power}
 <h2>Error</h2>{errors}
 <h2>Fitted parameters of the final model</h2>{params}
 <p>Standard errors are linearised (Gauss-Newton); the profile-likelihood intervals of the

@@ -32,20 +32,21 @@ for each. SI units inside; the ``*_mm`` figures are millimetres.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import replace
 from typing import Literal
 
 import numpy as np
 from scipy import stats
 
-from design.geometry import rest_position
-from design.model import EFFECTS, RingPairModel, model_for
+from design.model import RingPairModel, model_for
 from design.records import Design
 from design.registry import index
 from design.sections import tube_torsional_rigidity
+from design.units import DEG, MM
 from optimize.fitting.calibrate import (
     EFFECT_FREE,
     FREE_PARAMETERS,
@@ -56,8 +57,22 @@ from optimize.fitting.calibrate import (
     predict,
     row_sigma,
 )
+from optimize.fitting.diagnosis import (
+    Candidate,
+    Cause,
+    Diagnosis,
+    Fit,
+    parameter_values,
+    report_key,
+)
 from optimize.fitting.likelihood import Interval, profile_intervals
 from optimize.fitting.measurements import Measurements
+from optimize.fitting.structure import (
+    STRUCTURE_P,
+    ResidualDependence,
+    features,
+    residual_structure,
+)
 
 BIC_DROP = 10.0
 """Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
@@ -74,226 +89,12 @@ SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
 SCREEN_EVALUATIONS = 12
 """Model evaluations of a screening fit (a candidate's BIC before it is fitted in full)."""
-STRUCTURE_P = 1e-3
-"""A residual dependence on a feature is reported as structure below this p-value."""
 NOISE_P = 1e-3
 """With stated sigmas, residuals whose chi-square p-value is above this are noise."""
 
 Progress = Callable[[str], None]
 Fitted = tuple[CalibrationResult, bool | Literal["driven"]]
 """A calibration and the solve mode it was fitted with (see :func:`predict`)."""
-
-
-@dataclass(frozen=True)
-class ResidualDependence:
-    """Residual dependence on one feature.
-
-    feature : what the residuals were regressed on. r2 : fraction of the residual variance
-    the regression explains. p_value : F-test of the regression against pure noise.
-    """
-
-    feature: str
-    r2: float
-    p_value: float
-
-
-@dataclass(frozen=True)
-class Fit:
-    """One calibrated model with its cross-validated error."""
-
-    effects: frozenset[str]
-    calibration: CalibrationResult
-    cv_rmse_mm: float
-    rss: float
-    n: int
-    ordered: bool | Literal["driven"] = False
-    """How the fit solved the configurations (see :func:`optimize.fitting.calibrate.predict`)."""
-
-    @property
-    def name(self) -> str:
-        return "+".join(sorted(self.effects)) or "baseline"
-
-    def bic(self) -> float:
-        """n ln(RSS / n) + k ln n over the measured coordinates. [-]"""
-        k = len(self.calibration.names)
-        return self.n * math.log(self.rss / self.n) + k * math.log(self.n)
-
-    def summary(self) -> dict[str, object]:
-        """The spec's model block: rmse_mm, max_abs_mm, cv_rmse_mm, params (report units)."""
-        return {
-            "effects": sorted(self.effects),
-            "rmse_mm": self.calibration.rmse_mm,
-            "max_abs_mm": self.calibration.max_abs_mm,
-            "cv_rmse_mm": self.cv_rmse_mm,
-            "params": parameter_values(self.calibration),
-            "uncertainty": parameter_values(self.calibration, standard_error=True),
-        }
-
-
-@dataclass(frozen=True)
-class Cause:
-    """An accepted effect.
-
-    fit : the model it was accepted with (its cv_rmse_mm is the cause's).
-    params : its own parameters in the final model, report units (``name_<unit>``), with
-        the physical quantity behind each scale factor (e.g. the wire's torsional rigidity).
-    intervals : 1-sigma profile-likelihood interval of each of ``params``, report units.
-    evidence : one sentence: the structure it removed, the gain, the parameters.
-    """
-
-    name: str
-    fit: Fit
-    params: dict[str, float]
-    intervals: dict[str, tuple[float, float]]
-    evidence: str
-
-
-@dataclass(frozen=True)
-class Diagnosis:
-    """What the data say about the model (spec/formats.md, diagnosis result).
-
-    baseline, final : the calibrated baseline and the selected model.
-    causes : accepted effects, in the order they were added (strongest first).
-    structure_before, structure_after : residual structure of the baseline and the final
-        model, strongest first.
-    unexplained : the final residual still shows structure (or exceeds the stated noise)
-        that no candidate explains.
-    candidates : every fit tried: effect set -> (BIC, cross-validated RMSE or NaN). [-, mm]
-    time_s : wall time. [s]
-    """
-
-    baseline: Fit
-    final: Fit
-    causes: tuple[Cause, ...]
-    structure_before: tuple[ResidualDependence, ...]
-    structure_after: tuple[ResidualDependence, ...]
-    unexplained: str
-    candidates: dict[str, tuple[float, float]] = field(default_factory=dict)
-    time_s: float = 0.0
-
-    def to_json(self) -> dict[str, object]:
-        """The diagnosis JSON of spec/formats.md, with optional extra keys."""
-        base, final = self.baseline.summary(), self.final.summary()
-        final["interval"] = {k: list(v) for c in self.causes for k, v in c.intervals.items()}
-        ratio = self.final.cv_rmse_mm / self.baseline.cv_rmse_mm
-        return {
-            "baseline": base,
-            "causes": [
-                {
-                    "name": c.name,
-                    "params": c.params,
-                    "interval": {k: list(v) for k, v in c.intervals.items()},
-                    "cv_rmse_mm": c.fit.cv_rmse_mm,
-                    "evidence": c.evidence,
-                }
-                for c in self.causes
-            ],
-            "final": final,
-            "gain": {
-                "cv_rmse_ratio": ratio,
-                "rmse_ratio": self.final.calibration.rmse_mm / self.baseline.calibration.rmse_mm,
-                "max_abs_ratio": self.final.calibration.max_abs_mm
-                / self.baseline.calibration.max_abs_mm,
-            },
-            "unexplained": self.unexplained,
-            "structure": {
-                "baseline": [s.__dict__ for s in self.structure_before],
-                "final": [s.__dict__ for s in self.structure_after],
-            },
-            "candidates": {
-                k: {"bic": b, "cv_rmse_mm": None if math.isnan(c) else c}
-                for k, (b, c) in self.candidates.items()
-            },
-            "time_s": self.time_s,
-        }
-
-
-def report_key(name: str) -> tuple[str, float]:
-    """A free parameter's report key ``name`` or ``name_<unit>`` (mm, deg, g...) and the
-    factor from SI to that unit."""
-    label, factor = FREE_PARAMETERS[name].label
-    return (f"{name}_{label.lower()}" if label else name), factor
-
-
-def parameter_values(fit: CalibrationResult, standard_error: bool = False) -> dict[str, float]:
-    """Fitted parameters in report units, by :func:`report_key`."""
-    values = fit.standard_error if standard_error else fit.estimate
-    out = {}
-    for name in fit.names:
-        key, factor = report_key(name)
-        out[key] = float(values[name] * factor)
-    return out
-
-
-# ------------------------------------------------------------------- residual structure
-
-
-def _fourier(angle: np.ndarray, harmonics: int = 2) -> list[np.ndarray]:
-    return [f(h * angle) for h in range(1, harmonics + 1) for f in (np.cos, np.sin)]
-
-
-def _poly(x: np.ndarray, degree: int) -> list[np.ndarray]:
-    span = np.ptp(x) if np.ptp(x) > 0 else 1.0
-    z = (x - x.mean()) / span
-    return [z**d for d in range(1, degree + 1)]
-
-
-def features(design: Design, m: Measurements, model_position: np.ndarray) -> dict[str, np.ndarray]:
-    """Candidate signatures, each a design matrix without intercept, shape (N, k).
-
-    model_position : shape (N, 3), the fitted model's tip positions (for the deflection and
-    the distance to the external magnet). [m]
-    """
-    t1, t2 = m.command[:, 0], m.command[:, 1]
-    rest = rest_position(design.robot.free_length)
-    centre = np.asarray(design.external_magnet.center)
-    order = np.empty(len(m))
-    order[m.order()] = np.arange(len(m))
-    travel = np.zeros((len(m), 2))
-    seq = m.order()
-    step = np.diff(m.command[seq], axis=0)
-    travel[seq[1:]] = np.sign(step)
-    out = {
-        "theta1": _fourier(t1),
-        "theta2": _fourier(t2),
-        "theta1 - theta2": _fourier(t1 - t2),
-        "deflection": _poly(np.linalg.norm(model_position - rest, axis=1), 2),
-        "distance to the external magnet": _poly(
-            np.linalg.norm(model_position - centre, axis=1), 2
-        ),
-        "acquisition order": _poly(order, 3),
-        "direction of travel": [travel[:, 0], travel[:, 1]],
-    }
-    return {k: np.column_stack(v) for k, v in out.items() if np.ptp(np.column_stack(v)) > 0}
-
-
-def residual_structure(
-    residuals: np.ndarray, feature_matrices: dict[str, np.ndarray]
-) -> tuple[ResidualDependence, ...]:
-    """F-test of the residuals (N, 3; NaN where not measured) against each feature: each
-    measured component is regressed on the feature's columns plus an intercept, and the
-    sums of squares are pooled over components. Strongest (smallest p) first."""
-    out = []
-    for name, x in feature_matrices.items():
-        rss0 = rss1 = 0.0
-        df1 = df2 = 0
-        for c in range(3):
-            ok = np.isfinite(residuals[:, c])
-            if ok.sum() < x.shape[1] + 3:
-                continue
-            y = residuals[ok, c]
-            a = np.column_stack([np.ones(ok.sum()), x[ok]])
-            coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-            rank = np.linalg.matrix_rank(a)
-            rss0 += float(np.sum((y - y.mean()) ** 2))
-            rss1 += float(np.sum((y - a @ coef) ** 2))
-            df1 += rank - 1
-            df2 += ok.sum() - rank
-        if df1 == 0 or df2 == 0 or rss0 == 0:
-            continue
-        f = ((rss0 - rss1) / df1) / max(rss1 / df2, 1e-300)
-        out.append(ResidualDependence(name, 1 - rss1 / rss0, float(stats.f.sf(f, df1, df2))))
-    return tuple(sorted(out, key=lambda s: s.p_value))
 
 
 # ------------------------------------------------------------------------------ fitting
@@ -361,17 +162,15 @@ def _fit(
                 cal, path = scanned, "driven"
     options["ordered"] = path
     initial = {n: cal.estimate[n] for n in free}
-    e = cal.errors[np.isfinite(cal.errors)]
-    n = int(m.measured.sum())
-    rss = float(np.nansum(cal.residuals**2))
-    if e.size < len(m):  # unsolved rows count as a miss of the whole deflection
-        rss = math.inf
+    unsolved = int(np.count_nonzero(~np.isfinite(cal.errors)))
+    coordinates = int(m.measured.sum())
+    rss = math.inf if unsolved else float(np.nansum(cal.residuals**2))
     cv_rmse = math.nan
     if cv:
         cv_rmse = cross_validate(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
         ).rmse_mm
-    return Fit(effects, cal, cv_rmse, rss, n, path)
+    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved)
 
 
 def _scan(
@@ -469,10 +268,129 @@ def _cause(
     return Cause(name, after, params, intervals, text + ".")
 
 
+Starts = list[CalibrationResult | Mapping[str, float] | None]
+"""Where fits start (see :func:`_fit`)."""
+
+
+def _not_applicable(design: Design, m: Measurements, effect: str) -> str:
+    """Why ``effect`` cannot be told from these data at all ('' if it can)."""
+    if effect == "hysteresis" and m.sequence is None:
+        return "hysteresis needs the order of acquisition (a sequence column)"
+    if effect == "gravity" and design.environment.gravity is None:
+        return "the design file states no gravity (environment.gravity_m_s2)"
+    return ""
+
+
+def _reason(exc: Exception) -> str:
+    """An exception as one line: its type and message."""
+    text = " ".join(str(exc).split()) or "no message"
+    return f"{type(exc).__name__}: {text}"
+
+
+def _bic_order(c: Candidate) -> float:
+    return c.bic_change if np.isfinite(c.bic_change) else math.inf
+
+
+def _bic_verdict(c: Candidate) -> str:
+    if c.fit is not None and c.fit.unsolved:
+        return f"rejected: the model leaves {c.fit.unsolved} row(s) without an equilibrium"
+    return f"rejected: BIC {c.bic_change:+.1f} on top of {c.on_top_of}, not below -{BIC_DROP:g}"
+
+
+def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> str:
+    """What the final model leaves unexplained, and how large it is ('' if nothing)."""
+    left = [d for d in s if d.p_value < STRUCTURE_P]
+    size = f"{fit.calibration.rmse_mm:.3g} mm RMS, {fit.cv_rmse_mm:.3g} mm cross-validated"
+    stated = np.isfinite(m.sigma)
+    if stated.any():
+        axes = m.measured.sum(axis=1).mean()
+        noise = float(np.median(m.sigma[stated]) * math.sqrt(axes) / MM)
+        size += f"; the stated noise alone would give {noise:.3g} mm"
+    if left:
+        return (
+            "structure remains that no candidate explains: the residuals still depend on "
+            + ", ".join(f"{d.feature} (R^2 {d.r2:.2f})" for d in left[:3])
+            + f" ({size})"
+        )
+    if stated.any() and not _noise_consistent(fit, m):
+        return (
+            "the residual exceeds the stated noise without a pattern any candidate explains "
+            f"({size})"
+        )
+    return ""
+
+
+POWER_STRENGTH = {"wire_friction_angle": 2 * DEG, "catheter_friction_angle": 2 * DEG}
+"""Strengths at which an effect whose nominal strength is nil is judged for the power of
+the data (friction play of 2 deg in each transmission). [SI]"""
+DETECTABLE = 1.0
+"""The data can tell an effect apart where, at nominal strength, it leaves at least this
+many noise sigmas RMS per coordinate that the model without it cannot absorb. [-]"""
+
+
+def power_of_data(
+    design: Design, m: Measurements, final: Fit, effect: str, sigma: float | None
+) -> dict[str, object]:
+    """Could these data tell ``effect`` apart from the ``final`` model?
+
+    The final model with ``effect`` added, at the final estimates and the effect's
+    nominal strength (POWER_STRENGTH where that is nil), predicts the measured
+    coordinates; the final model is fitted to these predictions; what it cannot absorb,
+    RMS per coordinate over the noise (stated, else the final fit's residual), is the
+    ``margin``: below DETECTABLE the data could not have named the effect.
+    """
+    try:
+        model = model_for(final.effects | {effect})
+        params = final.calibration.params.copy()
+        for name, value in POWER_STRENGTH.items():
+            if name in EFFECT_FREE[effect]:
+                params[index(name)] = value
+        path: bool | Literal["driven"] = "driven" if m.sequence is not None else False
+        position = predict(model, params, m, path).equilibria.position
+        if not np.isfinite(position[m.measured]).all():
+            return {
+                "margin": math.inf,
+                "could_tell_apart": True,
+                "note": ("at nominal strength it leaves configurations without an equilibrium"),
+            }
+        ideal = replace(m, position=np.where(m.measured, position, np.nan))
+        fit = _fit(
+            design,
+            ideal,
+            final.effects,
+            k=2,
+            seed=0,
+            cv=False,
+            starts=[final.calibration],
+            sigma=sigma,
+            max_nfev=SCREEN_EVALUATIONS,
+        )
+    except Exception as exc:  # reported; the diagnosis goes on
+        return {"margin": math.nan, "could_tell_apart": None, "note": f"failed: {_reason(exc)}"}
+    stated = np.isfinite(m.sigma)
+    noise = float(np.median(m.sigma[stated])) if stated.any() else math.sqrt(final.rss / final.n)
+    if fit.unsolved:
+        return {
+            "margin": math.inf,
+            "could_tell_apart": True,
+            "note": (f"{final.name} cannot solve {fit.unsolved} of the configurations it predicts"),
+        }
+    rms = math.sqrt(fit.rss / fit.n)
+    margin = rms / noise if noise > 0 else math.inf
+    return {
+        "margin": margin,
+        "rms_mm": rms / MM,
+        "noise_mm": noise / MM,
+        "could_tell_apart": bool(margin >= DETECTABLE),
+        "note": f"at nominal strength it would leave {rms / MM:.3g} mm RMS per coordinate that "
+        f"{final.name} cannot absorb, {margin:.2g} x the noise ({noise / MM:.3g} mm)",
+    }
+
+
 def diagnose(
     design: Design,
     m: Measurements,
-    candidates: Iterable[str] = EFFECTS,
+    candidates: Iterable[str] = tuple(EFFECT_FREE),
     *,
     k: int = 5,
     seed: int = 0,
@@ -481,16 +399,28 @@ def diagnose(
 ) -> Diagnosis:
     """Find which model effects the measurements ``m`` of ``design`` call for.
 
-    candidates : effects to test (names of :data:`design.model.EFFECTS`).
+    candidates : effects to test (names of :data:`design.model.EFFECTS` that calibration
+        knows, :data:`optimize.fitting.calibrate.EFFECT_FREE`).
     k : folds of the cross-validation over configurations. seed : its shuffling.
     sigma : one-sigma position noise for rows that do not state one. [m]
     progress : called with a short message before each fit.
+
+    A candidate whose fit fails is reported (``candidates``, 'fit failed: ...') and the
+    search goes on without it.
     """
     t0 = time.perf_counter()
     say = progress or (lambda _: None)
-    candidates = [c for c in EFFECTS if c in set(candidates)]
-    if "hysteresis" in candidates and m.sequence is None:
-        candidates.remove("hysteresis")  # needs the order of acquisition
+    wanted = [c for c in EFFECT_FREE if c in set(candidates)]
+    tried: dict[str, Candidate] = {}
+    remaining = []
+    for name in wanted:
+        why = _not_applicable(design, m, name)
+        if why:
+            tried[name] = Candidate(
+                frozenset({name}), "baseline", None, math.nan, f"not tried: {why}"
+            )
+        else:
+            remaining.append(name)
     row_sigma(m, sigma)
     say("baseline")
     current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, starts=[None], sigma=sigma)
@@ -503,110 +433,204 @@ def diagnose(
         position = np.where(np.isfinite(position), position, m.position)
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
-    def refit_current(start: CalibrationResult, cv: bool) -> Fit:
-        return _fit(design, m, current.effects, k=k, seed=seed, cv=cv, starts=[start], sigma=sigma)
+    def attempt(effects: frozenset[str], cv: bool, starts: Starts, **options: int) -> Candidate:
+        """A fit of ``effects`` as a candidate on top of ``current`` (failure reported)."""
+        try:
+            f = _fit(
+                design, m, effects, k=k, seed=seed, cv=cv, starts=starts, sigma=sigma, **options
+            )
+        except Exception as exc:  # a candidate's failure is reported; the search goes on
+            return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
+        return Candidate(effects, current.name, f, f.bic() - current.bic(), "")
+
+    def starts_for(effects: frozenset[str]) -> Starts:
+        """Screening starts: the current estimates (and, in the first round, the nominal
+        design: the baseline may have bent its parameters to mimic the effect), the
+        added effects' own estimates from their single screens, and the candidate as it
+        reduces to the current model (NESTED_START)."""
+        added = effects - current.effects
+        starts: Starts = [current.calibration] + [None] * (not current.effects)
+        guesses = {n: v for e in added for n, v in screened.get(e, {}).items()}
+        nested = {n: NESTED_START[n] for e in added for n in EFFECT_FREE[e] if n in NESTED_START}
+        for extra in (guesses, nested):
+            if extra:
+                starts.append({**current.calibration.estimate, **extra})
+        return starts
+
+    def decide(round_: list[Candidate]) -> Candidate | None:
+        """Cross-validate the candidates in order of BIC; the first whose BIC falls by
+        more than BIC_DROP and whose cross-validated RMSE by more than CV_GAIN."""
+        for c in sorted(round_, key=_bic_order):
+            if c.fit is None:
+                tried[c.name] = c
+                continue
+            if not c.bic_change < -BIC_DROP:
+                tried[c.name] = replace(c, verdict=_bic_verdict(c))
+                continue
+            say(f"cross-validating {c.name}")
+            full = attempt(c.effects, True, [c.fit.calibration])
+            if full.fit is None or not full.bic_change < -BIC_DROP:
+                tried[c.name] = replace(full, verdict=full.verdict or _bic_verdict(full))
+                continue
+            before, after = current.cv_rmse_mm, full.fit.cv_rmse_mm
+            text = f"cross-validated RMSE {before:.3g} -> {after:.3g} mm"
+            if after < (1 - CV_GAIN) * before or (not np.isfinite(before) and np.isfinite(after)):
+                accepted = replace(full, verdict=f"accepted: BIC {full.bic_change:+.1f}, {text}")
+                tried[c.name] = accepted
+                for other in round_:  # not decided in this round
+                    if other.name not in tried or tried[other.name].verdict == "":
+                        tried[other.name] = replace(
+                            other, verdict=f"not decided: {c.name} was accepted first"
+                        )
+                return accepted
+            tried[c.name] = replace(
+                full,
+                verdict=f"rejected: BIC {full.bic_change:+.1f} passes, but the {text} does "
+                f"not fall by {CV_GAIN:.0%}",
+            )
+        return None
+
+    def unexplained_left(s: Sequence[ResidualDependence], fit: Fit) -> bool:
+        stated = np.isfinite(m.sigma).any()
+        return any(d.p_value < STRUCTURE_P for d in s) or (stated and not _noise_consistent(fit, m))
 
     s_base = structure(baseline)
     s_current = s_base
-    accepted_steps: list[
-        tuple[str, Fit, Fit, tuple[ResidualDependence, ...], tuple[ResidualDependence, ...]]
+    steps: list[
+        tuple[list[str], Fit, Fit, tuple[ResidualDependence, ...], tuple[ResidualDependence, ...]]
     ] = []
-    tried: dict[str, tuple[float, float]] = {baseline.name: (baseline.bic(), baseline.cv_rmse_mm)}
-    remaining = list(candidates)
-    refit_from: set[str] = set()  # candidates whose estimates the current model was refitted from
+    screened: dict[str, dict[str, float]] = {}  # each effect's own estimates, last screen
+    refit_from: set[str] = set()  # models whose estimates the current model was refitted from
     while remaining and not _noise_consistent(current, m):
-        fits = []
+        singles = []
         for name in remaining:
             say(f"testing {name} on top of {current.name}")
-            # Screening: a short fit from the current estimates (and, in the first round,
-            # from the nominal design: the baseline may have bent its parameters to mimic
-            # the effect). The candidate that is taken on is refitted in full.
-            starts: list[CalibrationResult | Mapping[str, float] | None] = [current.calibration]
-            if not current.effects:
-                starts.append(None)
-            nested = {n: NESTED_START[n] for n in EFFECT_FREE[name] if n in NESTED_START}
-            if nested:  # the candidate as it reduces to the current model
-                starts.append({**current.calibration.estimate, **nested})
-            f = _fit(
-                design,
-                m,
-                current.effects | {name},
-                k=k,
-                seed=seed,
-                cv=False,
-                starts=starts,
-                sigma=sigma,
-                max_nfev=SCREEN_EVALUATIONS,
-            )
-            tried[f.name] = (f.bic(), math.nan)
-            fits.append((f.bic() - current.bic(), name, f))
-        accepted = None
-        for drop, name, f in sorted(fits, key=lambda t: t[0]):
-            if not drop < -BIC_DROP:
-                break
-            say(f"cross-validating {f.name}")
-            f = _fit(
-                design, m, f.effects, k=k, seed=seed, cv=True, starts=[f.calibration], sigma=sigma
-            )
-            tried[f.name] = (f.bic(), f.cv_rmse_mm)
-            if f.cv_rmse_mm < (1 - CV_GAIN) * current.cv_rmse_mm:
-                accepted = (name, f)
-                break
-        if accepted is None:
+            effects = current.effects | {name}
+            c = attempt(effects, False, starts_for(effects), max_nfev=SCREEN_EVALUATIONS)
+            tried[c.name] = c
+            if c.fit is not None:
+                screened[name] = {n: c.fit.calibration.estimate[n] for n in EFFECT_FREE[name]}
+            singles.append(c)
+        accepted = decide(singles)
+        if accepted is None and len(remaining) > 1 and unexplained_left(s_current, current):
+            # Structure remains and no single addition pays: effects that only together
+            # explain it (each alone bends the others' parameters to mimic it).
+            pairs = []
+            for pair in itertools.combinations(remaining, 2):
+                effects = current.effects | set(pair)
+                say(f"testing {' + '.join(pair)} together on top of {current.name}")
+                c = attempt(effects, False, starts_for(effects), max_nfev=SCREEN_EVALUATIONS)
+                tried[c.name] = c
+                pairs.append(c)
+            accepted = decide(pairs)
+        if accepted is None or accepted.fit is None:
             break
-        name, f = accepted
+        f = accepted.fit
         # A candidate may only have found a better optimum of what the current model can
         # already do (e.g. rigid transmissions are the baseline). Refit the current model
         # from the candidate's estimates: if that closes the gap, the effect is not needed.
-        if name not in refit_from:
-            refit_from.add(name)
+        if f.name not in refit_from:
+            refit_from.add(f.name)
             say(f"refitting {current.name} from the estimates of {f.name}")
-            refit = refit_current(f.calibration, cv=False)
+            refit = _fit(
+                design,
+                m,
+                current.effects,
+                k=k,
+                seed=seed,
+                cv=False,
+                starts=[f.calibration],
+                sigma=sigma,
+            )
             if refit.bic() < current.bic() - 1e-6 and not f.bic() - refit.bic() < -BIC_DROP:
-                current = refit_current(refit.calibration, cv=True)
+                tried[f.name] = replace(
+                    accepted,
+                    verdict=f"rejected: refitting {current.name} from its estimates closes "
+                    f"the gap (BIC {f.bic() - refit.bic():+.1f})",
+                )
+                current = _fit(
+                    design,
+                    m,
+                    current.effects,
+                    k=k,
+                    seed=seed,
+                    cv=True,
+                    starts=[refit.calibration],
+                    sigma=sigma,
+                )
                 s_current = structure(current)
                 if not current.effects:
                     baseline, s_base = current, s_current
                 continue
         s_new = structure(f)
-        accepted_steps.append((name, current, f, s_current, s_new))
+        added = sorted(f.effects - current.effects)
+        steps.append((added, current, f, s_current, s_new))
         current, s_current = f, s_new
-        remaining.remove(name)
+        remaining = [r for r in remaining if r not in added]
+    if remaining and _noise_consistent(current, m):
+        for name in remaining:
+            effects = current.effects | {name}
+            if "+".join(sorted(effects)) not in tried:
+                tried["+".join(sorted(effects))] = Candidate(
+                    effects,
+                    current.name,
+                    None,
+                    math.nan,
+                    "not tried: the residual is consistent with the stated noise",
+                )
 
     # The causes' parameters as the final model estimates them, with profile-likelihood
     # intervals: the linearised errors are too small where parameters trade off along a
     # curved valley (optimize.fitting.likelihood).
-    own = [p for step in accepted_steps for p in EFFECT_FREE[step[0]]]
-    profiles = {}
+    own = [p for step in steps for e in step[0] for p in EFFECT_FREE[e]]
+    profiles: dict[str, Interval] = {}
     if own:
         say("profile-likelihood intervals of " + ", ".join(own))
-        profiles = profile_intervals(
-            design, m, current.calibration, own, ordered=current.ordered, sigma=sigma
-        )
-    causes = [_cause(design, *step, current, profiles) for step in accepted_steps]
+        try:
+            profiles = profile_intervals(
+                design, m, current.calibration, own, ordered=current.ordered, sigma=sigma
+            )
+        except Exception:  # the intervals are then null (JSON) with their reason
+            profiles = {p: Interval(math.nan, math.nan, 0) for p in own}
+    causes = []
+    for added, before, after, s0, s1 in steps:
+        for name in added:
+            cause = _cause(design, name, before, after, s0, s1, current, profiles)
+            if len(added) > 1:
+                others = ", ".join(a for a in added if a != name)
+                evidence = cause.evidence[:-1] + f" (accepted together with {others}: no single "
+                evidence += "addition paid)."
+                cause = replace(cause, evidence=evidence)
+            causes.append(cause)
 
-    left = [s for s in s_current if s.p_value < STRUCTURE_P]
-    unexplained = ""
-    if left:
-        unexplained = (
-            "structure remains that no candidate explains: the residuals still depend on "
-            + ", ".join(f"{s.feature} (R^2 {s.r2:.2f})" for s in left[:3])
-        )
-    elif np.isfinite(m.sigma).any() and not _noise_consistent(current, m):
-        unexplained = (
-            f"the residual ({current.calibration.rmse_mm:.3g} mm RMS) exceeds the stated "
-            "noise without a pattern any candidate explains"
-        )
+    power: dict[str, dict[str, object]] = {}
+    for name in remaining:
+        say(f"power of the data for {name}")
+        power[name] = power_of_data(design, m, current, name, sigma)
     return Diagnosis(
         baseline=baseline,
         final=current,
         causes=tuple(causes),
         structure_before=s_base,
         structure_after=s_current,
-        unexplained=unexplained,
+        unexplained=_unexplained(m, current, s_current),
         candidates=tried,
+        power=power,
         time_s=time.perf_counter() - t0,
     )
 
 
-__all__ = ["Cause", "Diagnosis", "Fit", "ResidualDependence", "diagnose", "residual_structure"]
+__all__ = [
+    "BIC_DROP",
+    "DETECTABLE",
+    "Candidate",
+    "Cause",
+    "Diagnosis",
+    "Fit",
+    "ResidualDependence",
+    "diagnose",
+    "parameter_values",
+    "power_of_data",
+    "report_key",
+    "residual_structure",
+]

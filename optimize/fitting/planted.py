@@ -40,23 +40,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from design.model import EFFECTS
 from design.records import Design
 from design.units import DEG, MM
-from optimize.fitting.diagnose import _fit
+from optimize.fitting.diagnose import DETECTABLE, _fit
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.setups import FACE_MM, random_design
 from optimize.fitting.synth import VIEWS, Synthetic, synthesize_data
 
+PLANTABLE = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
+"""The effects the diagnosis names (spec/formats.md)."""
 PLANTED_SETS: tuple[frozenset[str], ...] = (
     frozenset(),
-    *(frozenset({e}) for e in EFFECTS),
-    *(frozenset(p) for p in itertools.combinations(EFFECTS, 2)),
+    *(frozenset({e}) for e in PLANTABLE),
+    *(frozenset(p) for p in itertools.combinations(PLANTABLE, 2)),
 )
 """What the benchmark plants: nothing (the null sets), each effect, each pair."""
-DETECTABLE = 1.0
-"""A planted effect is detectable where the best model without it leaves at least this
-many noise sigmas RMS per coordinate on the noise-free data. [-]"""
 POINTS = (16, 80)
 """Range of commanded configurations of a data set."""
 NOISE_MM = (0.1, 0.5)
@@ -166,9 +164,15 @@ def margins(case: Planted) -> dict[str, float]:
     return out
 
 
-def draw_planted(rng: np.random.Generator, planted: frozenset[str], tries: int = 6) -> Planted:
+def draw_planted(
+    rng: np.random.Generator,
+    planted: frozenset[str],
+    tries: int = 6,
+    points: tuple[int, int] = POINTS,
+) -> Planted:
     """A bench data set with ``planted`` effects (module docstring), drawn again until it
-    is detectable, at most ``tries`` times (the last draw is returned either way)."""
+    is detectable, at most ``tries`` times (the last draw is returned either way).
+    ``points``: the range of commanded configurations, within POINTS."""
     case = None
     for attempt in range(1, tries + 1):
         face = NEAR_FACE_MM if "near_field" in planted else FACE_MM
@@ -187,7 +191,7 @@ def draw_planted(rng: np.random.Generator, planted: frozenset[str], tries: int =
         synthetic = synthesize_data(
             design,
             planted,
-            n=int(rng.integers(POINTS[0], POINTS[1] + 1)),
+            n=int(rng.integers(points[0], points[1] + 1)),
             view=view,
             noise_mm=noise,
             seed=int(rng.integers(2**31)),

@@ -124,8 +124,23 @@ def diagnose(
         c = fit.calibration
         table.add_row(name, f"{c.rmse_mm:.3f}", f"{c.max_abs_mm:.3f}", f"{fit.cv_rmse_mm:.3f}")
     console.print(table)
+    tried = Table(title="every model tried")
+    for col in ("model", "on top of", "RMSE (mm)", "CV RMSE (mm)", "BIC change", "verdict"):
+        tried.add_column(col, justify="left" if col in ("model", "verdict") else "right")
+    for name, row in doc["candidates"].items():
+        tried.add_row(
+            name,
+            row["on_top_of"],
+            _number(row["rmse_mm"]),
+            _number(row["cv_rmse_mm"]),
+            _number(row["bic_change"], "+.1f"),
+            row["verdict"],
+        )
+    console.print(tried)
     for cause in result.causes:
         console.print(f"cause {cause.evidence}")
+    for name, power in result.power.items():
+        console.print(f"power of the data for {name}: {power['note']}")
     if not result.causes:
         console.print(
             "causes: [] (the model does not explain the data either: see the warning)"
@@ -144,6 +159,11 @@ def diagnose(
             console.print(f"wrote {path}")
 
 
+def _number(value: float | None, spec: str = ".3f") -> str:
+    """A table cell: the number, or '-' where the JSON has null."""
+    return "-" if value is None else format(value, spec)
+
+
 def _typed(option: str) -> bool:
     """Whether the user gave ``option`` (rather than its default)."""
     return click.get_current_context().get_parameter_source(option) != ParameterSource.DEFAULT
@@ -155,6 +175,7 @@ def _check_size(m: Measurements, folds: int, *, typed: bool, seed: int) -> None:
     than the largest model's parameters. The message blames --folds only when ``typed``."""
     from design.model import EFFECTS
     from optimize.fitting.calibrate import configuration_folds, default_free
+
     if folds < 2:
         raise UserError(f"--folds must be at least 2; got {folds}")
     configurations = len(np.unique(np.round(m.command, 12), axis=0))

@@ -187,3 +187,40 @@ def test_the_profile_likelihood_covers_torsion_where_the_linearised_error_does_n
     for name in EFFECT_FREE["torsion"]:
         r = profile_sigma(design, m, fit, name, truth[name], ordered=False, starts=[truth])
         assert 1 < abs(r) < 4, name
+
+
+def test_non_finite_numbers_become_null_with_their_reason():
+    import math
+
+    from optimize.fitting.diagnosis import NULL_REASONS, finite_json
+
+    nulls: dict[str, str] = {}
+    doc = {"final": {"cv_rmse_mm": math.nan, "params": {"a": 1.0}}, "x": [np.inf, 2]}
+    out = finite_json(doc, "", nulls)
+    assert out == {"final": {"cv_rmse_mm": None, "params": {"a": 1.0}}, "x": [None, 2]}
+    assert nulls == {"final.cv_rmse_mm": NULL_REASONS["cv_rmse_mm"], "x[0]": "not a finite number"}
+
+
+def test_a_failing_candidate_is_reported_and_the_diagnosis_goes_on(monkeypatch):
+    import json
+
+    import optimize.fitting.diagnose as dg
+
+    real = dg._fit
+
+    def fit(design, m, effects, **options):
+        if "torsion" in effects:
+            raise FloatingPointError("planted\nfailure")
+        return real(design, m, effects, **options)
+
+    monkeypatch.setattr(dg, "_fit", fit)
+    m = synthesize_data(DEMO, ("gravity",), n=24, noise_mm=0.2, seed=4).measurements
+    result = dg.diagnose(DEMO, m, candidates=("torsion", "gravity"))
+    assert [c.name for c in result.causes] == ["gravity"]
+    doc = result.to_json()
+    json.dumps(doc, allow_nan=False)
+    failed = doc["candidates"]["torsion"]
+    assert failed["verdict"] == "fit failed: FloatingPointError: planted failure"
+    assert failed["bic"] is None and doc["null"]["candidates.torsion.bic"]
+    assert doc["candidates"]["gravity"]["verdict"].startswith("accepted: BIC")
+    assert doc["power"]["torsion"]["could_tell_apart"] in (True, False)
