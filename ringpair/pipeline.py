@@ -109,13 +109,15 @@ class StageError(RuntimeError):
 
 @dataclass
 class Run:
-    """Results of the stages so far, their timings [s] and whether each was reused."""
+    """Results of the stages so far, their timings [s], whether each was reused, and the
+    hand-off files written so far (design file, Pareto CSVs, parts list)."""
 
     out: Path
     study: Study
     results: dict[str, Any] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
     reused: dict[str, bool] = field(default_factory=dict)
+    handoff: list[Path] = field(default_factory=list)
 
 
 def _key(*parts: object) -> str:
@@ -250,6 +252,7 @@ def run_study(
         raise StageError("optimise", "the study is infeasible: " + best.report())
     chosen: Design = best.design
     save_design(chosen, out / BEST_DESIGN)
+    run.handoff.append(out / BEST_DESIGN)
     if study.pareto:
         pareto = _stage(
             run,
@@ -261,7 +264,7 @@ def run_study(
             ),
             w,
         )
-        write_pareto_csvs(pareto, study, out / "pareto")
+        run.handoff += write_pareto_csvs(pareto, study, out / "pareto")
     faithful = RingPairModel(DEFAULT_EFFECTS)
     _stage(
         run,
@@ -299,6 +302,7 @@ def run_study(
         lambda: _cad_summary(build_parts(chosen, out / "cad", cad_process, render=render)),
         w,
     )
+    run.handoff.append(out / "cad" / "parts.csv")
     if data is not None:
         _stage(
             run,

@@ -18,10 +18,12 @@ from rich.progress import (
     MofNCompleteColumn,
     Progress,
     SpinnerColumn,
+    Task,
     TaskID,
     TextColumn,
     TimeElapsedColumn,
 )
+from rich.text import Text
 
 from ringpair.options import (
     OVERWRITE_POLICY,
@@ -66,6 +68,13 @@ class _Stages:
         console.print(f"{what}: {took}", highlight=False, soft_wrap=True)
 
 
+class _Count(MofNCompleteColumn):
+    """'done/total' where a stage counts its work (Pareto points), nothing elsewhere."""
+
+    def render(self, task: Task) -> Text:
+        return super().render(task) if task.total is not None else Text("")
+
+
 @contextmanager
 def _stages() -> Iterator[_Stages]:
     """A :class:`_Stages` whose live lines show only where stderr is a terminal."""
@@ -73,7 +82,7 @@ def _stages() -> Iterator[_Stages]:
         SpinnerColumn(),
         TextColumn("{task.description}"),
         BarColumn(),
-        MofNCompleteColumn(),
+        _Count(),
         TimeElapsedColumn(),
     )
     live = err_console.is_terminal
@@ -196,5 +205,6 @@ def study(
         "no PDF (headless Chromium, Debian package 'chromium', is not installed)"
     ]
     console.print(f"wrote {written[-2]}, {written[-1]}, {manifest}, {pdf[0]}", soft_wrap=True)
+    console.print("hand-off: " + ", ".join(map(str, run.handoff)), soft_wrap=True)
     console.print(f"done in {time.perf_counter() - t0:.1f} s")
     console.print(headline(run), highlight=False, soft_wrap=True)

@@ -216,6 +216,9 @@ def test_console_says_each_stage_duration_what_the_parts_are_for_and_the_result(
     for stage in ("optimisation", "Pareto sweeps", "tolerance Monte Carlo", "report"):
         assert re.search(rf"^{stage}.*: \d+\.\d s$", text, re.M), stage
     assert "CAD of the recommended design (best_design.toml), fdm print" in text
+    handoff = next(ln for ln in text.splitlines() if ln.startswith("hand-off: "))
+    for name in ("best_design.toml", "pareto_external_distance.csv", "parts.csv"):
+        assert name in handoff, name
     doc = json.loads((out / "results.json").read_text())
     best, start = (doc["forward"][f"{k}_disc_radius_mm"] for k in ("best", "start"))
     last = text.strip().splitlines()[-1]
