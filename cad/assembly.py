@@ -219,15 +219,14 @@ def build_assembly(
     ----------
     design : The robot (SI).
     actuator, mounting : Built parts (mm).
-    theta1_deg : Distal ring angle; default: middle of the rotation limits (relative to
+    theta1_deg : Distal ring angle; default: middle of the stops' range (relative to
         theta2). [deg]
     theta2_deg : Proximal ring angle. [deg]
     """
     lay = actuator.layout
-    lo, hi = mounting.spec.rotation_limits_deg
-    if theta1_deg is None:
-        theta1_deg = theta2_deg + (lo + hi) / 2
     d = mounting.dims
+    if theta1_deg is None:
+        theta1_deg = theta2_deg + d.stop_angle_deg / 2
 
     to_base = cq.Location(cq.Vector(-lay.nose_x, 0.0, -lay.shaft_height))
     parts: dict[str, Part] = {}

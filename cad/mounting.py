@@ -1,6 +1,10 @@
-"""The two mounting pieces of the tip: seats for the ring magnets, bonded to wire and catheter.
+"""The two mounting pieces of the tip, built from :func:`design.mounting.tip_geometry`.
 
 CAD works in millimetres: every length here is in mm, angles in degrees.
+
+Every dimension comes from the design's one tip geometry (:mod:`design.mounting`, which
+the model uses for the pieces' mass, centre of mass and rigid segment): this module turns
+it into millimetres, checks that the pieces can be made and builds the solids.
 
 Each piece is built in its own frame: axis +Z pointing distally (towards the tip), z = 0
 at its proximal face, angles measured about +Z from local +X, which is the ring's
@@ -19,53 +23,46 @@ Distal piece (on the wire, turns the distal ring, theta1)
 
 The journal-in-sleeve keeps both rings coaxial; the end face on the shoulder keeps the
 face-to-face gap at ``design.tip.gap``; the key in the notch limits the relative rotation
-theta1 - theta2 to ``rotation_limits_deg``. Both pieces carry the single-start helical
-tracking groove (:mod:`cad.tracking`), which crosses local +X at the piece's proximal face
-(z = 0) and runs past both faces.
+theta1 - theta2 to [0, ``design.tip.mounting.stop_angle``] (the rotational stops). Each
+piece carries a single-start helical tracking groove (:mod:`cad.tracking`) whose pitch
+lets its visible length read the groove range; it crosses local +X at the piece's
+proximal face (z = 0) and runs past both faces.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass
 
 import cadquery as cq
 
 from cad.errors import require
-from cad.process import PrintProcess, mm
+from cad.process import PrintProcess, get_process, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
 from design.geometry import WIRE_CLEARANCE, ring_clears_wire
+from design.mounting import GROOVE_RANGE, MAX_STOP_ANGLE, TipGeometry, tip_geometry
 from design.records import Design
+from design.units import DEG, MM
 
 
 @dataclass(frozen=True)
 class MountingSpec:
-    """Designer's choices for the mounting pieces (lengths in mm, angles in deg).
+    """Designer's choices beyond the design file (lengths in mm, angles in deg); the
+    defaults make the pieces the model knows (:func:`design.mounting.tip_geometry`).
 
-    groove : The helical tracking groove.
-    wall_mm : Structural wall; ``None`` uses the process default (1.25 x minimum). [mm]
+    groove_range_deg : Rotation each tracking groove reads, 180 (the paper's sweep) to
+        360. [deg]
+    wall_mm : Structural wall; ``None`` uses the process's (1.25 x its minimum). [mm]
     outer_diameter_mm : Outer diameter of both pieces; ``None`` uses the smallest that
         holds every wall. [mm]
-    socket_depth_mm : Depth of the catheter socket in the proximal piece. [mm]
-    key_angle_deg : Angular width of the stop key. [deg]
-    key_height_mm : Axial height of the stop key. [mm]
-    axial_clearance_mm : Between the key's shoulder and the sleeve end. [mm]
-    rotation_limits_deg : Admissible relative rotation theta1 - theta2 (distal minus
-        proximal) allowed by key and notch. [deg]
-    glue_relief_depth_mm : Radial depth of the glue reservoir rings. [mm]
-    glue_port_mm : Diameter of the radial glue ports; ``None`` uses the wall. [mm]
+    socket_depth_mm : Depth of the catheter socket; ``None``: two catheter diameters. [mm]
     """
 
-    groove: GrooveSpec = field(default_factory=GrooveSpec)
+    groove_range_deg: float = math.degrees(GROOVE_RANGE)
     wall_mm: float | None = None
     outer_diameter_mm: float | None = None
-    socket_depth_mm: float = 5.0
-    key_angle_deg: float = 30.0
-    key_height_mm: float = 1.0
-    axial_clearance_mm: float = 0.2
-    rotation_limits_deg: tuple[float, float] = (0.0, 180.0)
-    glue_relief_depth_mm: float = 0.3
-    glue_port_mm: float | None = None
+    socket_depth_mm: float | None = None
 
 
 @dataclass(frozen=True)
@@ -75,7 +72,7 @@ class MountingDims:
     Proximal piece: ``socket_*``, ``passage_diameter``, ``shoulder_z`` (z of the shoulder
     the journal bears on), ``sleeve_*``, ``notch_*``, ``proximal_length``.
     Distal piece: ``journal_*``, ``pocket_depth_distal``, ``wire_bore``, ``chamber_*``,
-    ``key_*``, ``body_length``, ``distal_length``.
+    ``key_*``, ``body_length``, ``distal_length``. Grooves: ``*_pitch``, ``groove_*``.
     """
 
     magnet_outer_diameter: float
@@ -96,6 +93,7 @@ class MountingDims:
     shoulder_z: float
     sleeve_bore: float
     sleeve_length: float
+    stop_angle_deg: float
     notch_start_deg: float
     notch_span_deg: float
     notch_depth: float
@@ -113,7 +111,8 @@ class MountingDims:
     key_inner_diameter: float
     body_length: float
     distal_length: float
-    groove_pitch: float
+    proximal_pitch: float
+    distal_pitch: float
     groove_width: float
     groove_depth: float
 
@@ -122,6 +121,13 @@ class MountingDims:
         """z of the proximal piece's glue port (mid-socket). [mm]"""
         return self.socket_depth / 2
 
+    def groove(self, piece: str) -> GrooveSpec:
+        """The tracking groove of ``piece`` (``"proximal"`` or ``"distal"``): its pitch and
+        the notch travel on the visible length (the distal piece's body) less the width."""
+        visible = self.proximal_length if piece == "proximal" else self.body_length
+        pitch = self.proximal_pitch if piece == "proximal" else self.distal_pitch
+        return GrooveSpec(pitch, visible - self.groove_width, self.groove_width, self.groove_depth)
+
 
 @dataclass(frozen=True)
 class TrackingReport:
@@ -129,8 +135,9 @@ class TrackingReport:
 
     piece : ``"proximal"`` or ``"distal"``.
     pitch_mm : Groove pitch. [mm]
-    travel_mm : Grooved axial length of the piece (notch travel). [mm]
+    travel_mm : Notch travel on the piece's visible length. [mm]
     resolution_deg_per_mm : Rotation per mm of notch travel. [deg/mm]
+    readout_mm_per_deg : Notch travel per degree of rotation, pitch / 360. [mm/deg]
     range_deg : Rotation the notch covers on this piece. [deg]
     """
 
@@ -138,6 +145,7 @@ class TrackingReport:
     pitch_mm: float
     travel_mm: float
     resolution_deg_per_mm: float
+    readout_mm_per_deg: float
     range_deg: float
 
 
@@ -149,47 +157,66 @@ class MountingPieces:
     distal: cq.Solid
     dims: MountingDims
     spec: MountingSpec
+    geometry: TipGeometry
 
     def tracking(self) -> tuple[TrackingReport, TrackingReport]:
-        """Angular resolution and range of both grooves."""
-        d = self.dims
+        """Readout resolution and range of both grooves."""
         out = []
-        # The distal groove is visible on the body; the journal runs inside the sleeve.
-        for piece, travel in (("proximal", d.proximal_length), ("distal", d.body_length)):
+        for piece in ("proximal", "distal"):
+            g = self.dims.groove(piece)
             out.append(
                 TrackingReport(
                     piece=piece,
-                    pitch_mm=d.groove_pitch,
-                    travel_mm=travel,
-                    resolution_deg_per_mm=360.0 / d.groove_pitch,
-                    range_deg=min(360.0, 360.0 * travel / d.groove_pitch),
+                    pitch_mm=g.pitch_mm,
+                    travel_mm=g.travel_mm,
+                    resolution_deg_per_mm=g.resolution_deg_per_mm,
+                    readout_mm_per_deg=g.pitch_mm / 360.0,
+                    range_deg=g.range_deg,
                 )
             )
         return out[0], out[1]
 
 
-def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> MountingDims:
-    """Derive and check every dimension of the pieces from the design and the process.
+def tip_geometry_for(design: Design, process: PrintProcess, spec: MountingSpec) -> TipGeometry:
+    """The one tip geometry (:func:`design.mounting.tip_geometry`) of ``design`` printed
+    with ``process``, with the spec's choices. [SI]"""
+    t, r = design.tip, design.robot
+    wall = spec.wall_mm if spec.wall_mm is not None else process.wall_mm
+    optional = {"outer_diameter": spec.outer_diameter_mm, "socket_depth": spec.socket_depth_mm}
+    return tip_geometry(
+        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.gap,
+        r.catheter.outer_diameter, r.wire.outer_diameter, r.catheter.inner_diameter,
+        wall * MM, process.fit_allowance_mm * MM, process.running_clearance_mm * MM,
+        process.material_density_kg_m3, t.mounting.stop_angle,
+        groove_range=spec.groove_range_deg * DEG,
+        **{k: v * MM for k, v in optional.items() if v is not None},
+    )  # fmt: skip
+
+
+def tip_process(design: Design, process: str | PrintProcess | None = None) -> PrintProcess:
+    """The process the tip pieces are printed with: ``process``, or the design's
+    ``tip.mounting.process`` (resin by default) when None."""
+    return get_process(design.tip.mounting.process if process is None else process)
+
+
+def mounting_dims(
+    design: Design,
+    process: str | PrintProcess | None = None,
+    spec: MountingSpec | None = None,
+) -> MountingDims:
+    """Every dimension of the pieces of ``design`` printed with ``process`` (None: the
+    design's ``tip.mounting.process``), in mm, checked.
 
     Raises :class:`~cad.errors.CadError` naming the quantity for any impossible geometry.
     """
+    spec = spec or MountingSpec()
+    proc = tip_process(design, process)
     tip, wire, cath = design.tip, design.robot.wire, design.robot.catheter
-    Dm, dm, Lm, gap = (
-        mm(tip.magnet_outer_diameter),
-        mm(tip.magnet_inner_diameter),
-        mm(tip.magnet_length),
-        mm(tip.gap),
-    )
-    dw, Dc, dc = mm(wire.outer_diameter), mm(cath.outer_diameter), mm(cath.inner_diameter)
-    fit, clr = process.fit_allowance_mm, process.running_clearance_mm
-    g = spec.groove
-    w = spec.wall_mm if spec.wall_mm is not None else process.wall_mm
-    port = spec.glue_port_mm if spec.glue_port_mm is not None else process.wall_mm
-    rd = spec.glue_relief_depth_mm
-
-    spacing = mm(tip.spacing)  # ring centre to ring centre: the distal pocket's depth
-    require(Lm > 0, "tip ring: magnet length", "positive", Lm)
-    require(gap >= 0, "tip ring: gap", "zero or positive", gap)
+    Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
+    dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
+    w = spec.wall_mm if spec.wall_mm is not None else proc.wall_mm
+    require(mm(tip.magnet_length) > 0, "tip ring: magnet length", "positive", mm(tip.magnet_length))
+    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
     require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
     require(
         ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter),
@@ -199,43 +226,40 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
         dm,
     )
     require(
-        w >= process.min_wall_mm,
+        w >= proc.min_wall_mm,
         "mounting piece: wall",
-        f"at least the {process.name} minimum wall ({process.min_wall_mm:g} mm)",
+        f"at least the {proc.name} minimum wall ({proc.min_wall_mm:g} mm)",
         w,
     )
-    require(port > 0, "mounting piece: glue port diameter", "positive", port)
-    require(rd > 0, "mounting piece: glue relief depth", "positive", rd)
     require(
-        spec.socket_depth_mm > 0, "proximal piece: socket depth", "positive", spec.socket_depth_mm
-    )
-    require(spec.key_height_mm > 0, "distal piece: key height", "positive", spec.key_height_mm)
-    require(
-        spec.axial_clearance_mm > 0,
-        "mounting pieces: axial clearance",
-        "positive",
-        spec.axial_clearance_mm,
-    )
-    lo, hi = spec.rotation_limits_deg
-    require(
-        hi > lo, "mounting pieces: upper rotation limit", f"above the lower ({lo:g} deg)", hi, "deg"
-    )
-    notch_span = hi - lo + spec.key_angle_deg
-    require(
-        0 < spec.key_angle_deg and notch_span <= 300.0,
-        "mounting pieces: rotation range plus key angle",
-        "at most 300 deg so the sleeve keeps a bearing",
-        notch_span,
+        180.0 <= spec.groove_range_deg <= 360.0,
+        "tracking groove: range",
+        "between 180 deg (the paper's sweep) and 360 deg (one turn)",
+        spec.groove_range_deg,
         "deg",
     )
-
-    seat = Dm + fit
-    wire_bore = dw + fit
+    stop = math.degrees(tip.mounting.stop_angle)
     require(
-        wire_bore < dm,
+        0 < stop <= math.degrees(MAX_STOP_ANGLE) + 1e-9,
+        "mounting pieces: stop angle",
+        f"in (0, {math.degrees(MAX_STOP_ANGLE):g}] deg so the sleeve keeps a bearing",
+        stop,
+        "deg",
+    )
+    if spec.socket_depth_mm is not None:
+        require(
+            spec.socket_depth_mm > 0,
+            "proximal piece: socket depth",
+            "positive",
+            spec.socket_depth_mm,
+        )
+    g = tip_geometry_for(design, proc, spec)
+    d = {name: mm(float(getattr(g, name))) for name in _LENGTHS}
+    require(
+        d["wire_bore"] < dm,
         "distal piece: wire bore diameter (wire + fit allowance)",
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
-        wire_bore,
+        d["wire_bore"],
     )
     require(
         dc < dm,
@@ -243,96 +267,61 @@ def mounting_dims(design: Design, process: PrintProcess, spec: MountingSpec) -> 
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
         dc,
     )
-    socket = Dc + fit
-    journal = seat + 2 * w
-    sleeve_bore = journal + clr
-    chamber = max(wire_bore, port) + 2 * rd
-    reservoir = socket + 2 * rd
-    require(
-        port < min(socket, chamber),
-        "mounting piece: glue port diameter",
-        f"smaller than the reservoir it feeds ({min(socket, chamber):.3g} mm)",
-        port,
-    )
-    skin = 2 * (w + g.depth_mm)
-    needed = max(sleeve_bore, reservoir, chamber) + skin
-    outer = spec.outer_diameter_mm if spec.outer_diameter_mm is not None else needed
+    outer, skin = d["outer_diameter"], 2 * (w + d["groove_depth"])
     # The derived outer diameter is the needed one to rounding; compare with that slack.
     slack = 1e-9 * max(outer, 1.0)
+    clr = proc.running_clearance_mm
     require(
-        seat <= outer - skin - 2 * w - clr + slack,
+        d["seat_diameter"] <= outer - skin - 2 * w - clr + slack,
         "mounting piece: magnet seat diameter (magnet + fit allowance)",
         f"at most {outer - skin - 2 * w - clr:.3g} mm for a piece of outer diameter "
         f"{outer:g} mm (journal wall {w:g}, running clearance {clr:g}, sleeve wall {w:g} "
-        f"and groove depth {g.depth_mm:g} mm)",
-        seat,
+        f"and groove depth {d['groove_depth']:g} mm)",
+        d["seat_diameter"],
     )
+    socket = "proximal piece: catheter socket diameter (catheter + fit + glue relief)"
+    for name, what in (
+        ("reservoir_diameter", socket),
+        ("chamber_diameter", "distal piece: glue chamber diameter"),
+    ):
+        require(
+            d[name] + skin <= outer + slack,
+            what,
+            f"at most {outer - skin:.3g} mm for a piece of outer diameter {outer:g} mm",
+            d[name],
+        )
     require(
-        reservoir + skin <= outer + slack,
-        "proximal piece: catheter socket diameter (catheter + fit + glue relief)",
-        f"at most {outer - skin:.3g} mm for a piece of outer diameter {outer:g} mm",
-        reservoir,
-    )
-    require(
-        chamber + skin <= outer + slack,
-        "distal piece: glue chamber diameter",
-        f"at most {outer - skin:.3g} mm for a piece of outer diameter {outer:g} mm",
-        chamber,
-    )
-
-    key_height = spec.key_height_mm
-    journal_length = max(spacing + w, key_height + spec.axial_clearance_mm + w, 0.5 * journal)
-    sleeve_length = journal_length - spec.axial_clearance_mm
-    reservoir_length = port + 0.4
-    require(
-        reservoir_length < spec.socket_depth_mm,
+        d["reservoir_length"] < d["socket_depth"],
         "proximal piece: socket depth",
-        f"longer than the glue reservoir ({reservoir_length:.3g} mm)",
-        spec.socket_depth_mm,
+        f"longer than the glue reservoir ({d['reservoir_length']:.3g} mm)",
+        d["socket_depth"],
     )
-    shoulder = max(spec.socket_depth_mm + w + Lm, g.travel_mm - sleeve_length)
-    body = max(g.travel_mm, reservoir_length + 2 * w)
-    chamber_length = reservoir_length
+    key = math.degrees(float(g.key_angle))
     return MountingDims(
         magnet_outer_diameter=Dm,
         magnet_inner_diameter=dm,
-        magnet_length=Lm,
-        gap=gap,
-        outer_diameter=outer,
-        wall=w,
-        seat_diameter=seat,
-        catheter_outer_diameter=Dc,
+        catheter_outer_diameter=mm(cath.outer_diameter),
         wire_diameter=dw,
-        socket_diameter=socket,
-        socket_depth=spec.socket_depth_mm,
-        reservoir_diameter=reservoir,
-        reservoir_length=reservoir_length,
-        port_diameter=port,
-        passage_diameter=dc,
-        shoulder_z=shoulder,
-        sleeve_bore=sleeve_bore,
-        sleeve_length=sleeve_length,
-        notch_start_deg=lo - spec.key_angle_deg / 2,
-        notch_span_deg=notch_span,
-        notch_depth=key_height + spec.axial_clearance_mm,
-        proximal_length=shoulder + sleeve_length,
-        journal_diameter=journal,
-        journal_length=journal_length,
-        pocket_depth_distal=spacing,
-        wire_bore=wire_bore,
-        chamber_diameter=chamber,
-        chamber_length=chamber_length,
-        chamber_z=journal_length + body / 2,
-        key_start_deg=-spec.key_angle_deg / 2,
-        key_angle_deg=spec.key_angle_deg,
-        key_height=key_height,
-        key_inner_diameter=sleeve_bore,
-        body_length=body,
-        distal_length=journal_length + body,
-        groove_pitch=g.pitch_mm,
-        groove_width=g.width_mm,
-        groove_depth=g.depth_mm,
+        stop_angle_deg=stop,
+        notch_start_deg=-key / 2,
+        notch_span_deg=stop + key,
+        key_start_deg=-key / 2,
+        key_angle_deg=key,
+        key_inner_diameter=d["sleeve_bore"],
+        chamber_length=d["reservoir_length"],
+        **d,
     )
+
+
+_LENGTHS = (
+    "magnet_length", "gap", "outer_diameter", "wall", "seat_diameter", "socket_diameter",
+    "socket_depth", "reservoir_diameter", "reservoir_length", "port_diameter",
+    "passage_diameter", "shoulder_z", "sleeve_bore", "sleeve_length", "notch_depth",
+    "proximal_length", "journal_diameter", "journal_length", "pocket_depth_distal",
+    "wire_bore", "chamber_diameter", "chamber_z", "key_height", "body_length",
+    "distal_length", "proximal_pitch", "distal_pitch", "groove_width", "groove_depth",
+)  # fmt: skip
+"""The :class:`~design.mounting.TipGeometry` lengths :class:`MountingDims` holds in mm."""
 
 
 def helical_groove(
@@ -355,7 +344,7 @@ def helical_groove(
     return cutter.rotate(cq.Vector(), Z_AXIS, phase_deg).translate(cq.Vector(0, 0, z_start))
 
 
-def proximal_piece(d: MountingDims, spec: MountingSpec, with_groove: bool = True) -> cq.Solid:
+def proximal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     """The proximal mounting piece (on the catheter), in its own frame. [mm]"""
     envelope = cylinder(d.outer_diameter, 0.0, d.proximal_length)
     port_z = d.socket_port_z
@@ -379,16 +368,23 @@ def proximal_piece(d: MountingDims, spec: MountingSpec, with_groove: bool = True
     ]
     groove = None
     if with_groove:
-        e = spec.groove.width_mm + 1.0
-        groove = helical_groove(d.outer_diameter, spec.groove, -e, d.proximal_length + e)
+        e = d.groove_width + 1.0
+        groove = helical_groove(d.outer_diameter, d.groove("proximal"), -e, d.proximal_length + e)
     return _cut_all(envelope, groove, cuts)
 
 
-def distal_piece(d: MountingDims, spec: MountingSpec, with_groove: bool = True) -> cq.Solid:
+def distal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     """The distal mounting piece (on the wire), in its own frame. [mm]"""
     jl = d.journal_length
-    envelope = cylinder(d.journal_diameter, 0.0, jl + 0.01).fuse(
-        cylinder(d.outer_diameter, jl, d.distal_length),
+
+    def turned(solid: cq.Solid) -> cq.Solid:
+        # Cylinders with their seam at 180 deg (the glue port's side), away from the key
+        # and the groove's start: with the seam at 0, OCCT's cut of the groove from the
+        # fused envelope removed nothing for some sizes.
+        return solid.rotate(cq.Vector(), Z_AXIS, 180.0)
+
+    envelope = turned(cylinder(d.journal_diameter, 0.0, jl + 0.01)).fuse(
+        turned(cylinder(d.outer_diameter, jl, d.distal_length)),
         annular_sector(
             d.key_inner_diameter,
             d.outer_diameter,
@@ -398,6 +394,10 @@ def distal_piece(d: MountingDims, spec: MountingSpec, with_groove: bool = True) 
             jl + 0.01,
         ),
     )
+    groove = None
+    if with_groove:
+        e = d.groove_width + 1.0
+        groove = helical_groove(d.outer_diameter, d.groove("distal"), -e, d.distal_length + e)
     cz = d.chamber_z
     cuts = [
         cylinder(d.seat_diameter, -1.0, d.pocket_depth_distal),
@@ -405,10 +405,6 @@ def distal_piece(d: MountingDims, spec: MountingSpec, with_groove: bool = True) 
         cylinder(d.chamber_diameter, cz - d.chamber_length / 2, cz + d.chamber_length / 2),
         radial_port(d.port_diameter, cz, d.outer_diameter / 2, 180.0),
     ]
-    groove = None
-    if with_groove:
-        e = spec.groove.width_mm + 1.0
-        groove = helical_groove(d.outer_diameter, spec.groove, -e, d.distal_length + e)
     return _cut_all(envelope, groove, cuts)
 
 
@@ -423,7 +419,7 @@ def _cut_all(envelope: cq.Shape, groove: cq.Solid | None, cuts: list[cq.Solid]) 
 
 def build_mounting_pieces(
     design: Design,
-    process: PrintProcess,
+    process: str | PrintProcess | None = None,
     spec: MountingSpec | None = None,
     with_groove: bool = True,
 ) -> MountingPieces:
@@ -431,16 +427,21 @@ def build_mounting_pieces(
 
     Parameters
     ----------
-    design : The robot (SI); its ring, wire and catheter sizes set the seats and bores.
-    process : Fits, clearances and minimum wall.
-    spec : Designer's choices; defaults reproduce the paper's tracking groove.
+    design : The robot (SI); its ring, wire and catheter sizes set the seats and bores,
+        its ``tip.mounting`` the stops (and, with ``process`` None, the process).
+    process : Fits, clearances, minimum wall and material; None: the design's
+        ``tip.mounting.process`` (resin unless the design file says otherwise), the
+        pieces the model knows.
+    spec : Designer's choices; the defaults make the pieces the model knows.
     with_groove : Leave the helical groove out (for checks against closed-form volumes).
     """
     spec = spec or MountingSpec()
-    dims = mounting_dims(design, process, spec)
+    proc = tip_process(design, process)
+    dims = mounting_dims(design, proc, spec)
     return MountingPieces(
-        proximal=proximal_piece(dims, spec, with_groove),
-        distal=distal_piece(dims, spec, with_groove),
+        proximal=proximal_piece(dims, with_groove),
+        distal=distal_piece(dims, with_groove),
         dims=dims,
         spec=spec,
+        geometry=tip_geometry_for(design, proc, spec),
     )

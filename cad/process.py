@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cad.errors import CadError
+from design.mounting import WALL_FACTOR
 from design.units import MM
 
 
@@ -51,8 +52,9 @@ class PrintProcess:
 
     @property
     def wall_mm(self) -> float:
-        """Default structural wall: 25 % above the process minimum. [mm]"""
-        return 1.25 * self.min_wall_mm
+        """Default structural wall: 25 % above the process minimum
+        (:data:`design.mounting.WALL_FACTOR`). [mm]"""
+        return WALL_FACTOR * self.min_wall_mm
 
 
 # FDM: 0.4 mm nozzle, two perimeters make the thinnest reliable wall (0.8 mm); Prusa MK4

@@ -42,7 +42,7 @@ class GrooveSpec:
         require(self.pitch_mm > 0, "groove pitch", "positive", self.pitch_mm)
         require(self.travel_mm > 0, "groove travel", "positive", self.travel_mm)
         require(
-            self.travel_mm <= self.pitch_mm,
+            self.travel_mm <= self.pitch_mm * (1 + 1e-9),  # one turn, to rounding
             "groove travel",
             f"at most one pitch ({self.pitch_mm:.4g} mm) so every notch position means one angle",
             self.travel_mm,

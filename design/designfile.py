@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -26,7 +26,8 @@ from design.geometry import (
     ring_centres,
     ring_clears_wire,
 )
-from design.records import Design, Environment, ExternalMagnet, Robot, Tip, Tube
+from design.mounting import DEFAULT_PROCESS, PROCESSES
+from design.records import Design, Environment, ExternalMagnet, Mounting, Robot, Tip, Tube
 from design.registry import PARAMETERS, file_unit
 from design.suggest import did_you_mean
 from design.units import MM
@@ -137,7 +138,7 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
         raise DesignError(f"[{name}] must be a table of keys; got {node!r}")
     keys = {k.name: k for k in SECTIONS[name]}
     subsections = {s.split(".")[-1] for s in SECTIONS if s.startswith(name + ".")}
-    extra = {"shape"} if name == "external_magnet" else set()
+    extra = {"external_magnet": {"shape"}, "tip.mounting": {"process"}}.get(name, set())
     for given in node:
         if given not in keys and given not in subsections and given not in extra:
             allowed = set(keys) | subsections | extra
@@ -211,6 +212,7 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
         t["gap_mm"],
         t["density_kg_m3"],
         t["mass_g"],
+        _mounting(doc),
     )
     if tip.magnet_inner_diameter >= tip.magnet_outer_diameter:
         raise DesignError(
@@ -256,6 +258,33 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
     design = Design(name, robot, tip, ext, environment, description)
     _check_clearance(design)
     return design
+
+
+def _mounting(doc: dict[str, Any]) -> Mounting:
+    """The optional ``[tip.mounting]`` section: ``process`` (a name of
+    :data:`design.mounting.PROCESSES`, default resin) sets the defaults of the wall, fit,
+    clearance and density keys."""
+    node = doc["tip"].get("mounting", {})
+    if not isinstance(node, dict):
+        raise DesignError(f"[tip.mounting] must be a table of keys; got {node!r}")
+    process = node.get("process", DEFAULT_PROCESS)
+    if process not in PROCESSES:
+        raise DesignError(
+            f"tip.mounting.process must be one of {', '.join(map(repr, PROCESSES))}; "
+            f"got {process!r}"
+        )
+    given = _section({"tip": {"mounting": node}}, "tip.mounting")
+    # keys the file leaves out take the process's value (the registry's default is resin's)
+    values = {field: given[key] for key, field in _MOUNTING.items() if key in node}
+    return Mounting.printed_by(process, **values)
+
+
+_MOUNTING = {
+    p.key.rsplit(".", 1)[1]: p.field.rsplit(".", 1)[1]
+    for p in PARAMETERS.values()
+    if p.key and p.field and p.key.startswith("tip.mounting.")
+}
+"""The ``[tip.mounting]`` keys of the registry and the record fields they set."""
 
 
 def _check_clearance(design: Design) -> None:
@@ -332,19 +361,28 @@ def design_to_dict(design: Design) -> dict[str, Any]:
     doc["robot"] = {}
     doc["tip"] = {}
     doc["external_magnet"] = {"shape": design.external_magnet.shape}
+    mounting = design.tip.mounting
+    defaults = Mounting.printed_by(mounting.process)
+    if mounting.process != DEFAULT_PROCESS:
+        doc["tip"]["mounting"] = {"process": mounting.process}
     for p in PARAMETERS.values():
         if p.key is None or p.field is None:
             continue
         section, leaf = p.key.rsplit(".", 1)
         if section == "environment" and design.environment.gravity is None:
             continue
+        value = p.value(design)
+        default = p.default
+        if section == "tip.mounting":  # the process's value
+            default = p.value(replace(design, tip=replace(design.tip, mounting=defaults)))
+        if "[" not in p.field and default is not None and value == default:
+            continue
         node = doc
         for part in section.split("."):
             node = node.setdefault(part, {})
-        value = p.value(design)
         if "[" in p.field:
             node.setdefault(leaf, []).append(_file_units(value, file_unit(p.name)[1]))
-        elif p.default is None or value != p.default:
+        else:
             node[leaf] = _file_units(value, file_unit(p.name)[1])
     return doc
 

@@ -16,6 +16,19 @@ friction. Effects (spec/formats.md names), each reducing to the baseline in its 
   tip), along ``environment.gravity_m_s2``.
 - ``hysteresis``: backlash/friction play in each transmission; acts on ordered command
   sequences (:func:`design.equilibrium.solve_sequence`) through :func:`play`.
+- ``printed_tip``: the tip as built (:mod:`design.mounting`): the flexible rod ends at the
+  proximal mounting piece's proximal face, a rigid segment carries the rings, the tracked
+  point (the proximal ring's centre, still at ``free_length`` from the base on the straight
+  robot) lies ``rigid_offset`` along it; with ``gravity``, each piece's weight acts at its
+  centre of mass; with ``torsion``, the pieces' rotational stops hold the rings' relative
+  angle and the pre-twist offsets the wire's command (:mod:`design.stops`). Its limit, pieces
+  of no size, is the bare rings of the other effects.
+
+The baseline leaves the rigid segment out on purpose: it is the paper's model, whose rod is
+the catheter's whole free length with the rings at its end (eq. 6, L = 150 mm) and whose
+stiffness scale K_E was tuned on that geometry; adding the segment would change the
+reproduced results (tests/design/test_paper_*) without making them the paper's. The model
+for design work (:data:`DEFAULT_EFFECTS`) includes it.
 
 Unknowns x: rod coordinates (linear: q = (dy, dz, phi_y, phi_z); large deflection: the
 base internal force n0 and moment m0, scaled to (n0 L^3 / EI, m0 L / EI)), then the tip
@@ -39,16 +52,18 @@ from design.cylinder_field import cylinder_field
 from design.dipole import dipole_field, dipole_field_gradient
 from design.geometry import magnet_spacing, ring_centres, ring_clearance
 from design.magnets import cylinder_moment, ring_moment, ring_volume
+from design.mounting import tip_geometry
 from design.records import Design
 from design.registry import NAMES, index, parameter_vector
 from design.sections import polar_moment_of_area, second_moment_of_area, shear_modulus
+from design.stops import commanded_angles, resting_angles, stop_stiffness, stop_torque
 from design.wrench import tip_wrench
 
-EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
-"""Model extensions by name (spec/formats.md)."""
+EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis", "printed_tip")
+"""Model extensions by name (spec/formats.md; ``printed_tip`` is the project's)."""
 
 
-DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity"})
+DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity", "printed_tip"})
 """The model for design work: the most faithful that is well posed from a design file alone
 and stays fast (about 2,100 configurations per second on two cores). ``torsion`` is left out:
 with touching rings (kappa > 1) it makes the robot multistable, so the state depends on the
@@ -120,6 +135,16 @@ class Symbols(dict):
             s["external_diameter"], s["external_length"], s["external_remanence"]
         )
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
+        self.tip = tip_geometry(
+            s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"],
+            s["magnet_gap"], s["catheter_outer_diameter"], s["wire_outer_diameter"],
+            s["catheter_inner_diameter"], s["mount_wall"], s["mount_fit_allowance"],
+            s["mount_running_clearance"], s["mount_density"], s["stop_angle"],
+        )  # fmt: skip
+        """The printed mounting pieces (:func:`design.mounting.tip_geometry`)."""
+        self.rod_length = s["free_length"]
+        """The flexible rod's length: the free length, less the rigid tip segment's offset
+        where the model has ``printed_tip`` (it sets this). [m]"""
 
 
 def _rotation_rates(quaternion: ca.SX) -> ca.SX:
@@ -189,7 +214,8 @@ class RingPairModel:
       external magnet (:func:`magnet_clearance`)), for a final state;
     - ``pose`` -> (position (3), frame (3x3), tip angles (2));
     - ``initial`` (command, params) -> x0, the unloaded robot (straight, tip angles =
-      command).
+      command; against its stops with ``torsion`` and ``printed_tip``,
+      :func:`design.stops.resting_angles`).
 
     Stability monitors. Linear rod: the Sylvester minors of the stiffness form (all > 0 iff
     the equilibrium is stable), in ``newton`` and ``check`` alike. Large-deflection rod:
@@ -251,6 +277,14 @@ class RingPairModel:
         s = Symbols(prm)
         load = s["load_scale"]
         length, ei = s["free_length"], s.bending_rigidity
+        printed = "printed_tip" in effects
+        stops = printed and torsion
+        # The flexible rod ends where the rigid tip segment starts, ``offset`` before the
+        # tracked point (the proximal ring's centre); the baseline has no segment (see the
+        # module's docstring).
+        offset = s.tip.rigid_offset if printed else 0
+        s.rod_length = length - offset if printed else length
+        rod_length = s.rod_length
         angles = x[n_rod:] if torsion else command
         moment = load * s.ring_moment
         weight_rate = ca.SX.zeros(3)  # distributed load per unit load_scale [N/m]
@@ -258,32 +292,55 @@ class RingPairModel:
             weight_rate = s.rod_mass_per_length * s.gravity
         distributed = load * weight_rate
         field_model = self._field_model(s)
-
-        def applied(position: ca.SX, frame: ca.SX, tip_angles: ca.SX) -> ca.SX:
-            """Loads at a tip pose: force (3) [N] and moment about the tip (3) [N m], base
-            frame, then with torsion the axial torque on each ring (2) [N m]."""
-            force, torque = tip_wrench(
-                field_model, position, frame, tip_angles, moment, s.magnet_spacing
-            )
-            if "gravity" in effects:
-                g = load * s.gravity
-                ring_weight = s.ring_mass * g
-                force = force + 2 * ring_weight + s["tip_mass"] * g
-                torque = torque + s.magnet_spacing * ca.cross(frame[:, 0], ring_weight)  # distal
-            out = [force, torque]
-            if torsion:
-                out.append(
-                    self._axial_torques(field_model, position, frame, tip_angles, moment, s, load)
-                )
-            return ca.vertcat(*out)
-
+        # Point masses on the rigid segment: (arm from the rod's end along the tangent, mass).
+        masses = [
+            (offset, s.ring_mass),
+            (offset + s.magnet_spacing, s.ring_mass),
+            (offset, s["tip_mass"]),
+        ]
+        if printed:
+            masses += [
+                (s.tip.proximal_arm, s.tip.proximal_mass),
+                (s.tip.distal_arm, s.tip.distal_mass),
+            ]
         # Twist of each transmission per unit axial torque, L / GJ. [rad / (N m)]
         twist = length / s.torsional_rigidity if torsion else None
+        commanded = command
+        if stops:
+            commanded = ca.vertcat(*commanded_angles(command, s["stop_angle"], s["pretwist"]))
+            contact = stop_stiffness(twist)
+
+        def applied(position: ca.SX, frame: ca.SX, tip_angles: ca.SX) -> ca.SX:
+            """Loads at the rod's end ``position`` with ``frame``: force (3) [N] and moment
+            about the rod's end (3) [N m], base frame, then with torsion the axial torque on
+            each ring (2) [N m], the stops' included."""
+            tangent = frame[:, 0]
+            tracked = position + offset * tangent if printed else position
+            force, torque = tip_wrench(
+                field_model, tracked, frame, tip_angles, moment, s.magnet_spacing
+            )
+            if printed:
+                torque = torque + offset * ca.cross(tangent, force)
+            if "gravity" in effects:
+                g = load * s.gravity
+                for arm, mass in masses:
+                    force = force + mass * g
+                    torque = torque + arm * ca.cross(tangent, mass * g)
+            out = [force, torque]
+            if torsion:
+                axial = self._axial_torques(
+                    field_model, tracked, frame, tip_angles, moment, s, load
+                )
+                if stops:
+                    lam = stop_torque(tip_angles[0] - tip_angles[1], s["stop_angle"], contact)
+                    axial = axial + ca.vertcat(lam, -lam)
+                out.append(axial)
+            return ca.vertcat(*out)
 
         def with_twist(r_rod: ca.SX, loads: ca.SX) -> ca.SX:
             if twist is None:
                 return r_rod
-            return ca.vertcat(r_rod, angles - command - twist * loads[6:8])
+            return ca.vertcat(r_rod, angles - commanded - twist * loads[6:8])
 
         if large:
             kirchhoff = self._kirchhoff(x, prm, s, angles, weight_rate, applied, with_twist, twist)
@@ -293,18 +350,18 @@ class RingPairModel:
             monitor_solver = ca.vec(jac_solver)
             relaxation = ca.solve(k_solver, r)
         else:
-            position, frame = cantilever.tip_pose(x[:4], length)
+            position, frame = cantilever.tip_pose(x[:4], rod_length)
             loads = applied(position, frame, angles)
             bending = cantilever.bending_load(loads[0:3], loads[3:6], frame[:, 0])
             r_rod = (
                 x[:4]
-                - cantilever.compliance(length, ei) @ bending
-                - cantilever.distributed_load_response(distributed, length, ei)
+                - cantilever.compliance(rod_length, ei) @ bending
+                - cantilever.distributed_load_response(distributed, rod_length, ei)
             )
             r = with_twist(r_rod, loads)
             jac_solver = jac = ca.jacobian(r, x)
             dr_dload = ca.jacobian(r, load)
-            stiffness = [cantilever.stiffness(length, ei)]
+            stiffness = [cantilever.stiffness(rod_length, ei)]
             if torsion:
                 stiffness.append(ca.diag(s.torsional_rigidity / length))
             # The stiffness form K_s dr/dx (K_s = blockdiag(K, GJ/L)) is the Hessian of the
@@ -322,6 +379,8 @@ class RingPairModel:
             scale = ca.vertcat(*[length if k < 3 else 1 for k in range(n)])
             metric = (length / ei) * ca.diag(scale**2) @ gradient_map
             direction, fall_matrix = metric @ r, metric @ jac_solver
+        if printed:  # the tracked point, from the rod's end
+            position = position + offset * frame[:, 0]
         clearance = magnet_clearance(s, position, frame)
         # Newton's step and the load tangent share one factorisation.
         newton_solve = ca.solve(jac_solver, ca.horzcat(r, -dr_dload))
@@ -366,7 +425,10 @@ class RingPairModel:
                 opts,
             ),
         }
-        x0 = ca.vertcat(ca.SX.zeros(n_rod), command) if torsion else ca.SX.zeros(n_rod)
+        rest = command
+        if stops:  # the unloaded robot against its stops
+            rest = ca.vertcat(*resting_angles(command, s["stop_angle"], s["pretwist"], twist))
+        x0 = ca.vertcat(ca.SX.zeros(n_rod), rest) if torsion else ca.SX.zeros(n_rod)
         functions["initial"] = ca.Function(
             "initial", [command, prm], [x0], ["command", "params"], ["x0"], opts
         )
@@ -387,7 +449,7 @@ class RingPairModel:
         frame).
         """
         n_rod = self.n_rod
-        length, ei = s["free_length"], s.bending_rigidity
+        length, ei = s.rod_length, s.bending_rigidity
         load = s["load_scale"]
         wrench_scale = ca.vertcat(ei / length**3 * ca.DM.ones(3), ei / length * ca.DM.ones(3))
         row_scale = ca.vertcat(length**3 / ei * ca.DM.ones(3), length / ei * ca.DM.ones(3))

@@ -6,9 +6,11 @@ and megapascals are converted at the boundary by :mod:`design.designfile`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from design.geometry import magnet_spacing
+from design.mounting import DEFAULT_PROCESS, PROCESSES
 
 Vector3 = tuple[float, float, float]
 
@@ -47,6 +49,45 @@ class Robot:
 
 
 @dataclass(frozen=True)
+class Mounting:
+    """The printed mounting pieces of the tip (:mod:`design.mounting`).
+
+    process : How they are printed, a name of :data:`design.mounting.PROCESSES`; it sets
+        the defaults of the next four.
+    wall : The pieces' structural wall. [m]
+    fit_allowance : Diametral allowance of a glued seat (ring, catheter, wire). [m]
+    running_clearance : Diametral and axial clearance of the running fit. [m]
+    density : Density of the printed material. [kg/m^3]
+    stop_angle : The rotational stops hold the rings' relative angle theta1 - theta2 (at
+        the tip) within [0, stop_angle]: 0 parallel, pi antiparallel. [rad]
+    pretwist : Commanded offset of the wire (theta1) against the catheter, set when the
+        robot is assembled: with the stops it presses the rings against one (the paper
+        "locks" them so). [rad]
+    """
+
+    process: str = DEFAULT_PROCESS
+    wall: float = PROCESSES[DEFAULT_PROCESS].wall
+    fit_allowance: float = PROCESSES[DEFAULT_PROCESS].fit_allowance
+    running_clearance: float = PROCESSES[DEFAULT_PROCESS].running_clearance
+    density: float = PROCESSES[DEFAULT_PROCESS].density
+    stop_angle: float = math.pi
+    pretwist: float = 0.0
+
+    @classmethod
+    def printed_by(cls, process: str, **values: float) -> Mounting:
+        """The pieces printed by ``process`` (:data:`design.mounting.PROCESSES`), its wall,
+        fit, clearance and density unless ``values`` give them."""
+        p = PROCESSES[process]
+        numbers = {
+            "wall": p.wall,
+            "fit_allowance": p.fit_allowance,
+            "running_clearance": p.running_clearance,
+            "density": p.density,
+        }
+        return cls(process, **{**numbers, **values})
+
+
+@dataclass(frozen=True)
 class Tip:
     """The two equal, diametrically magnetised ring magnets at the tip.
 
@@ -54,7 +95,9 @@ class Tip:
     remanence : Remanent flux density of the ring material. [T]
     gap : Face-to-face gap; centre spacing is magnet_length + gap. [m]
     density : Magnet mass density. [kg/m^3]
-    mass : Extra mass carried at the tip (mounting pieces, glue). [kg]
+    mass : Extra mass carried at the proximal ring's centre (glue; the mounting pieces'
+        own mass comes from ``mounting``). [kg]
+    mounting : The printed mounting pieces.
     """
 
     magnet_outer_diameter: float
@@ -64,6 +107,7 @@ class Tip:
     gap: float
     density: float
     mass: float = 0.0
+    mounting: Mounting = field(default_factory=Mounting)
 
     @property
     def spacing(self) -> float:

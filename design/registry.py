@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from design.mounting import MAX_STOP_ANGLE, RESIN
 from design.records import Design
 from design.units import DEG, GRAM, MM, MPA
 
@@ -167,8 +168,34 @@ _TABLE: list[Parameter] = [
         0.0, 30000.0, True,
     ),
     Parameter(
-        "tip_mass", "kg", "extra mass at the tip (mounting pieces)", "tip.mass", "tip.mass_g",
+        "tip_mass", "kg", "extra mass at the proximal ring's centre (glue)", "tip.mass",
+        "tip.mass_g",
         0.0, 1000.0, default=0.0, fit=Fit("linear", 0.0, 0.5, 1.0, 1e-3),
+    ),
+    # the printed mounting pieces (design.mounting); process numbers default to resin's
+    *[
+        Parameter(
+            f"mount_{field}", unit, f"mounting pieces' {meaning}", f"tip.mounting.{field}",
+            f"tip.mounting.{key}", low, high, True, default=getattr(RESIN, field),
+        )
+        for field, unit, meaning, key, low, high in (
+            ("wall", "m", "wall", "wall_mm", 0.0, 20.0),
+            ("fit_allowance", "m", "fit allowance of glued seats", "fit_allowance_mm", -1.0, 5.0),
+            (
+                "running_clearance", "m", "running clearance", "running_clearance_mm",
+                0.0, 5.0,
+            ),
+            ("density", "kg/m^3", "material density", "density_kg_m3", 0.0, 30000.0),
+        )
+    ],
+    Parameter(
+        "stop_angle", "rad", "stops: relative rotation theta1 - theta2 allowed, from 0",
+        "tip.mounting.stop_angle", "tip.mounting.stop_angle_deg", 0.0,
+        round(MAX_STOP_ANGLE / DEG, 9), True, default=np.pi,
+    ),
+    Parameter(
+        "pretwist", "rad", "pre-twist: commanded offset of the wire against the catheter",
+        "tip.mounting.pretwist", "tip.mounting.pretwist_deg", -3600.0, 3600.0, default=0.0,
     ),
     Parameter(
         "external_diameter", "m", "external cylinder diameter", "external_magnet.diameter",

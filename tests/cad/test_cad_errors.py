@@ -56,7 +56,7 @@ def test_catheter_too_wide_for_the_piece_is_rejected(demonstrator: Design) -> No
     cath = replace(demonstrator.robot.catheter, outer_diameter=6e-3, inner_diameter=1.0e-3)
     design = replace(demonstrator, robot=replace(demonstrator.robot, catheter=cath))
     with pytest.raises(CadError, match=r"catheter socket diameter .* must be at most"):
-        build_mounting_pieces(design, FDM, MountingSpec(outer_diameter_mm=9.25))
+        build_mounting_pieces(design, FDM, MountingSpec(outer_diameter_mm=9.45))
 
 
 def test_groove_longer_than_its_pitch_is_rejected() -> None:

@@ -16,7 +16,7 @@ import pytest
 from scipy.integrate import quad
 
 from cad.assembly import tip_locations
-from cad.mounting import MountingDims, MountingSpec, build_mounting_pieces
+from cad.mounting import MountingDims, MountingSpec, build_mounting_pieces, mounting_dims
 from cad.process import FDM, RESIN
 from cad.tracking import GrooveSpec
 from design.records import Design
@@ -110,10 +110,11 @@ def _notch_centres(solid: cq.Shape, radius: float, length: float, angles_deg: np
 
 
 def test_groove_pitch_and_width_measured_from_the_solid(fdm_pieces) -> None:
-    d, groove = fdm_pieces.dims, fdm_pieces.spec.groove
+    d = fdm_pieces.dims
+    groove = d.groove("proximal")
     probe = d.outer_diameter / 2 - groove.depth_mm / 2
-    # Stay clear of the glue port (180 deg, low z) and the stop notch (top end).
-    angles = np.arange(10.0, 111.0, 10.0)
+    # Stay clear of the faces, the glue port (180 deg, low z) and the stop notch (top end).
+    angles = np.arange(30.0, 131.0, 10.0)
     z, width = _notch_centres(fdm_pieces.proximal, probe, d.proximal_length, angles)
     slope, z0 = np.polyfit(angles, z, 1)
     residual = z - (z0 + slope * angles)
@@ -131,12 +132,19 @@ def test_tracking_resolution_and_range_reproduce_the_paper() -> None:
     assert groove.range_deg == pytest.approx(16.0 * 8.2)
 
 
-def test_pieces_report_resolution_and_range(fdm_pieces) -> None:
-    proximal, distal = fdm_pieces.tracking()
-    for t in (proximal, distal):
-        assert t.resolution_deg_per_mm == pytest.approx(8.2)
-        assert t.range_deg == pytest.approx(360.0 * t.travel_mm / t.pitch_mm)
-        assert t.travel_mm >= 16.0
+@pytest.mark.parametrize("range_deg", [180.0, 270.0, 360.0])
+def test_each_groove_reads_the_range_on_its_visible_length(demonstrator: Design, range_deg):
+    # Issue 16: the groove reads the whole range driven (>= 180 deg, the paper's sweep)
+    # on the piece as made, and reports its readout in mm per degree.
+    spec = MountingSpec(groove_range_deg=range_deg)
+    d = mounting_dims(demonstrator, RESIN, spec)
+    pieces = {"proximal": d.proximal_length, "distal": d.body_length}
+    for t in build_reports(d, spec):
+        assert t.range_deg == pytest.approx(range_deg)
+        assert t.readout_mm_per_deg == pytest.approx(t.pitch_mm / 360.0)
+        assert t.resolution_deg_per_mm == pytest.approx(1 / t.readout_mm_per_deg)
+        assert t.travel_mm == pytest.approx(pieces[t.piece] - d.groove_width)
+        assert d.groove_width < t.pitch_mm / 2  # the groove stays a single notch
 
 
 def test_groove_chosen_from_camera_resolution() -> None:
@@ -155,11 +163,15 @@ def _overlap(a: cq.Shape, b: cq.Shape) -> float:
     return common.Volume() if common.Solids() else 0.0
 
 
-def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design) -> None:
+@pytest.mark.parametrize("stop_deg", [180.0, 120.0])
+def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design, stop_deg) -> None:
+    # The paper's rotational stops: the key turns freely within [0, stop angle] of relative
+    # rotation and collides beyond.
     gap_mm = 0.3
-    design = replace(demonstrator, tip=replace(demonstrator.tip, gap=gap_mm * 1e-3))
-    spec = MountingSpec(rotation_limits_deg=(0.0, 180.0))
-    pieces = build_mounting_pieces(design, FDM, spec, with_groove=False)
+    mounting = replace(demonstrator.tip.mounting, stop_angle=math.radians(stop_deg))
+    tip = replace(demonstrator.tip, gap=gap_mm * 1e-3, mounting=mounting)
+    design = replace(demonstrator, tip=tip)
+    pieces = build_mounting_pieces(design, FDM, with_groove=False)
     d = pieces.dims
     ring = cq.Solid.makeCylinder(d.magnet_outer_diameter / 2, d.magnet_length).cut(
         cq.Solid.makeCylinder(d.magnet_inner_diameter / 2, d.magnet_length)
@@ -174,7 +186,7 @@ def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design) 
             "ring_d": ring.moved(locs["ring_magnet_distal"]),
         }
 
-    mid = placed(90.0)
+    mid = placed(stop_deg / 2)
     rp, rd = mid["ring_p"].BoundingBox(), mid["ring_d"].BoundingBox()
     assert rd.xmin - rp.xmax == pytest.approx(gap_mm, abs=1e-6)  # face-to-face gap
     assert (rp.xmin + rp.xmax) / 2 == pytest.approx(150.0, abs=1e-6)  # proximal centre at L
@@ -185,10 +197,10 @@ def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design) 
     for ring_name, piece in (("ring_p", "proximal"), ("ring_d", "distal")):
         assert _overlap(mid[ring_name], mid[piece]) < 1e-6
     # The key turns freely between the limits and collides beyond them.
-    for theta1 in (0.0, 90.0, 180.0):
+    for theta1 in (0.0, stop_deg / 2, stop_deg):
         parts = placed(theta1)
         assert _overlap(parts["proximal"], parts["distal"]) < 1e-6, theta1
-    for theta1 in (-8.0, 188.0):
+    for theta1 in (-8.0, stop_deg + 8.0):
         parts = placed(theta1)
         assert _overlap(parts["proximal"], parts["distal"]) > 0.05, theta1
 
@@ -198,8 +210,64 @@ def test_dimensions_derived_from_the_magnet_hold_at_the_limit(demonstrator: Desi
     # The piece's outer diameter is derived from the magnet seat, so the seat sits exactly
     # at its limit; rounding must not reject it (the default study's optimum, 2.8899 mm
     # rings, was rejected by 1 ulp).
-    from cad.mounting import mounting_dims
-
     tip = replace(demonstrator.tip, magnet_outer_diameter=ring_od_mm * 1e-3)
     dims = mounting_dims(replace(demonstrator, tip=tip), FDM, MountingSpec())
     assert isinstance(dims, MountingDims)
+
+
+def build_reports(d: MountingDims, spec: MountingSpec):
+    """The tracking reports of pieces with dimensions ``d`` (no solids needed)."""
+    from cad.mounting import MountingPieces
+
+    return MountingPieces(None, None, d, spec, None).tracking()  # type: ignore[arg-type]
+
+
+@pytest.fixture(scope="module")
+def resin_pieces(demonstrator: Design):
+    return build_mounting_pieces(demonstrator)  # the design's process: resin by default
+
+
+def test_tip_pieces_default_to_resin(demonstrator: Design, resin_pieces) -> None:
+    assert demonstrator.tip.mounting.process == "resin"
+    assert resin_pieces.dims.wall == pytest.approx(RESIN.wall_mm)
+
+
+def test_solids_match_the_model_geometry_within_one_percent(resin_pieces) -> None:
+    # Issue 16: the model's mass, centre of mass, rigid segment and diameter of the pieces
+    # (design.mounting.tip_geometry) are those of the CadQuery solids, groove included.
+    g, d = resin_pieces.geometry, resin_pieces.dims
+    density = RESIN.material_density_kg_m3
+    for piece, solid, length in (
+        ("proximal", resin_pieces.proximal, d.proximal_length),
+        ("distal", resin_pieces.distal, d.distal_length),
+    ):
+        volume = getattr(g, f"{piece}_volume") / 1e-9  # mm^3
+        assert solid.Volume() == pytest.approx(volume, rel=0.01), piece
+        assert solid.Volume() * 1e-9 * density == pytest.approx(
+            getattr(g, f"{piece}_mass"), rel=0.01
+        )
+        centre = solid.Center()  # centre of mass, mm, own frame
+        assert centre.z == pytest.approx(getattr(g, f"{piece}_centroid") * 1e3, rel=0.01), piece
+        # The model puts it on the axis; the notch and key sectors move it off by < 2 % of
+        # the diameter (0.11 mm for the demonstrator's proximal piece).
+        assert math.hypot(centre.x, centre.y) < 0.02 * g.outer_diameter * 1e3, piece
+        bb = solid.BoundingBox()
+        assert bb.zlen == pytest.approx(length, rel=0.01)
+        assert max(bb.xlen, bb.ylen) == pytest.approx(g.outer_diameter * 1e3, rel=0.01)
+    rigid = d.shoulder_z + d.distal_length
+    assert g.rigid_length * 1e3 == pytest.approx(rigid, rel=1e-9)
+    assert g.rigid_offset * 1e3 == pytest.approx(d.shoulder_z - d.magnet_length / 2, rel=1e-9)
+
+
+def test_tip_assembly_extent_is_the_rigid_segment(demonstrator: Design, resin_pieces) -> None:
+    # Placed in the base frame, the pieces span the rigid segment: from free length less
+    # the rigid offset (where the flexible rod ends) for the rigid length.
+    d, g = resin_pieces.dims, resin_pieces.geometry
+    locs = tip_locations(demonstrator, d, 90.0, 0.0)
+    placed = resin_pieces.proximal.moved(locs["mounting_piece_proximal"]).fuse(
+        resin_pieces.distal.moved(locs["mounting_piece_distal"])
+    )
+    bb = placed.BoundingBox()
+    start = (demonstrator.robot.free_length - g.rigid_offset) * 1e3
+    assert bb.xmin == pytest.approx(start, abs=1e-6)
+    assert bb.xmax - bb.xmin == pytest.approx(g.rigid_length * 1e3, rel=1e-6)

@@ -116,3 +116,65 @@ def test_optional_friction_and_tip_mass_round_trip(tmp_path, demonstrator_doc):
     assert load_design(tmp_path / "d.toml") == d
     with pytest.raises(DesignError, match="robot.wire.friction_angle_deg"):
         design_from_dict(edited(doc, "robot.wire.friction_angle_deg", -1.0))
+
+
+def _with_mounting(doc: dict, **keys) -> dict:
+    doc = copy.deepcopy(doc)
+    doc["tip"]["mounting"] = keys
+    return doc
+
+
+def test_mounting_section_is_optional_and_defaults_to_resin(demonstrator):
+    # Issue 16: the tip's mounting pieces default to resin, stops at 0 and 180 deg (the
+    # paper's range), no pre-twist.
+    m = demonstrator.tip.mounting
+    assert (m.process, m.wall, m.fit_allowance, m.running_clearance) == (
+        "resin",
+        pytest.approx(0.5e-3),
+        pytest.approx(0.05e-3),
+        pytest.approx(0.1e-3),
+    )
+    assert m.stop_angle == pytest.approx(np.pi)
+    assert m.pretwist == 0.0
+    assert "mounting" not in dumps_design(demonstrator)
+
+
+def test_mounting_process_sets_the_numbers_and_keys_override_them(tmp_path, demonstrator_doc):
+    doc = _with_mounting(
+        demonstrator_doc, process="fdm", wall_mm=1.2, stop_angle_deg=150.0, pretwist_deg=-20.0
+    )
+    m = design_from_dict(doc).tip.mounting
+    assert m.process == "fdm"
+    assert m.wall == pytest.approx(1.2e-3)  # given
+    assert m.fit_allowance == pytest.approx(0.15e-3)  # fdm's
+    assert m.density == pytest.approx(1240.0)
+    assert m.stop_angle == pytest.approx(np.deg2rad(150.0))
+    assert m.pretwist == pytest.approx(np.deg2rad(-20.0))
+    d = design_from_dict(doc)
+    save_design(d, tmp_path / "d.toml")
+    assert load_design(tmp_path / "d.toml") == d
+
+
+@pytest.mark.parametrize(
+    ("keys", "words"),
+    [
+        ({"process": "sls"}, ["tip.mounting.process", "'resin', 'fdm'", "'sls'"]),
+        ({"stop_angle_deg": 0.0}, ["tip.mounting.stop_angle_deg", "> 0", "<= 270"]),
+        ({"stop_angle_deg": 300.0}, ["tip.mounting.stop_angle_deg", "<= 270"]),
+        ({"pretwist_deg": "a lot"}, ["tip.mounting.pretwist_deg", "a number"]),
+        ({"wall_mm": -0.1}, ["tip.mounting.wall_mm", "> 0"]),
+        ({"stops_deg": 90.0}, ["unknown key tip.mounting.stops_deg"]),
+    ],
+)
+def test_bad_mounting_keys_name_the_key(demonstrator_doc, keys, words):
+    with pytest.raises(DesignError) as err:
+        design_from_dict(_with_mounting(demonstrator_doc, **keys))
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_mounting_must_be_a_table(demonstrator_doc):
+    doc = copy.deepcopy(demonstrator_doc)
+    doc["tip"]["mounting"] = 3
+    with pytest.raises(DesignError, match=r"\[tip.mounting\] must be a table"):
+        design_from_dict(doc)
