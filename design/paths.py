@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from design.ellipse import fit_ellipse
 from design.equilibrium import solve_equilibria, solve_sequence
 from design.model import RingPairModel
 from design.steering import REACHED, steer
@@ -42,16 +43,53 @@ total rotation (every schedule that turns each ring one way costs the same) towa
 smoothest: without it a schedule may zig-zag between solution branches at no cost."""
 
 
-def workspace_center(model: RingPairModel, params: np.ndarray) -> tuple[float, float]:
-    """The centre of the workspace, where paths are centred unless told: the mean tip (y, z)
-    over the rim, the loop of parallel rings (the rest position's (0, 0) without loads
-    that bend the robot on their own, e.g. gravity). [m]"""
+def _rim(model: RingPairModel, params: np.ndarray) -> np.ndarray:
+    """The tip (y, z) along the rim of the workspace, the loop of parallel rings, every 2
+    deg where it has a state, shape (P, 2). [m]"""
     loop = angle_grid(np.deg2rad(2.0))
     eq = solve_equilibria(model, params, loop, loop)
     rim = eq.position[eq.stable, 1:]
     if len(rim) == 0:
         raise ValueError("no configuration of parallel rings has a state: no workspace")
-    return float(rim[:, 0].mean()), float(rim[:, 1].mean())
+    return rim
+
+
+def workspace_center(model: RingPairModel, params: np.ndarray) -> tuple[float, float]:
+    """The centre of the workspace, where paths are centred unless told: the mean tip (y, z)
+    over the rim, the loop of parallel rings (the rest position's (0, 0) without loads
+    that bend the robot on their own, e.g. gravity). [m]"""
+    y, z = _rim(model, params).mean(axis=0)
+    return float(y), float(z)
+
+
+def largest_ellipse(
+    model: RingPairModel, params: np.ndarray, count: int = 48, halvings: int = 7
+) -> PathSchedule:
+    """The largest ellipse about the workspace's centre, axes along y and z, that the tip
+    can be driven around (:attr:`PathSchedule.followed`): the rim's half-extents along y
+    and z scaled down by bisection (``halvings`` times; the paper steers "an elliptical
+    pattern with the largest attainable bending"). Its schedule. [m]"""
+    rim = _rim(model, params)
+    center = rim.mean(axis=0)
+    semi = (rim.max(axis=0) - rim.min(axis=0)) / 2
+    low, high, best = 0.0, 1.0, None
+    for k in range(halvings + 1):
+        size = high if k == 0 else (low + high) / 2
+        schedule = follow(
+            model,
+            params,
+            ellipse(size * semi[0], size * semi[1], count, (center[0], center[1])),
+            closed=True,
+        )
+        if schedule.followed:
+            low, best = size, schedule
+            if k == 0:
+                break
+        elif k > 0:
+            high = size
+    if best is None:
+        raise ValueError("no ellipse about the workspace's centre can be followed")
+    return best
 
 
 def circle(radius: float, count: int, center: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
@@ -247,6 +285,38 @@ def follow(
     )
 
 
+@dataclass(frozen=True)
+class Evaluation:
+    """The paper's evaluation of a steered path (sec. "Workspace Evaluation": bi-plane
+    tracking of the tip driven around an ellipse), on the driven tip at the path's points.
+
+    max_y, max_z : largest deflection from the straight robot along y and along z. [m]
+    mean_deflection : mean distance of the tip from the straight robot's axis. [m]
+    rms_to_ellipse : RMS distance of the tip to the ellipse fitted to it
+        (:func:`design.ellipse.fit_ellipse`). [m]
+    """
+
+    max_y: float
+    max_z: float
+    mean_deflection: float
+    rms_to_ellipse: float
+
+
+def evaluate(schedule: PathSchedule) -> Evaluation:
+    """The paper's numbers for a driven path (:class:`Evaluation`)."""
+    tip = schedule.position[:, 1:]
+    tip = tip[np.isfinite(tip).all(axis=1)]
+    rms = np.nan
+    if len(tip) >= 5:
+        rms = float(np.sqrt(np.mean(fit_ellipse(tip).distance(tip) ** 2)))
+    return Evaluation(
+        max_y=float(np.abs(tip[:, 0]).max()),
+        max_z=float(np.abs(tip[:, 1]).max()),
+        mean_deflection=float(np.linalg.norm(tip, axis=1).mean()),
+        rms_to_ellipse=rms,
+    )
+
+
 def _distance_to_path(tips: np.ndarray, points: np.ndarray, closed: bool) -> np.ndarray:
     """Distance of each tip (K, 2) to the polyline through ``points`` (M, 2) (closed: back to
     the first); inf where a tip is not finite. [m]"""
@@ -260,4 +330,4 @@ def _distance_to_path(tips: np.ndarray, points: np.ndarray, closed: bool) -> np.
     return np.where(np.isfinite(out), out, np.inf)
 
 
-__all__ = ["REACHED", "PathSchedule", "circle", "ellipse", "follow", "line"]
+__all__ = ["REACHED", "PathSchedule", "circle", "ellipse", "follow", "largest_ellipse", "line"]

@@ -89,8 +89,12 @@ def plot_projection(
 
 def plot_path(schedule: PathSchedule, path: Path, title: str) -> None:
     """A steered path: the requested and the driven tip, looking along the base x axis
-    (left), and the schedule of ring angles (right)."""
-    fig, (ax, angles) = plt.subplots(1, 2, figsize=(11, 4.6))
+    (left), in 3-D (middle), and the schedule of ring angles (right)."""
+    fig = plt.figure(figsize=(16, 4.8))
+    fig.subplots_adjust(wspace=0.4)
+    ax = fig.add_subplot(1, 3, 1)
+    space = fig.add_subplot(1, 3, 2, projection="3d")
+    angles = fig.add_subplot(1, 3, 3)
     want = schedule.points / MM
     if schedule.closed:
         want = np.vstack([want, want[:1]])
@@ -113,15 +117,31 @@ def plot_path(schedule: PathSchedule, path: Path, title: str) -> None:
     ax.legend(loc="best", fontsize=7)
     ax.set_title("the tip, looking along the robot (base x axis)", fontsize=9)
     fig.suptitle(title, fontsize=10)
+    cloud = schedule.driven / MM
+    space.plot(*cloud.T, color=REACH, lw=1.2, label="driven tip")
+    spot = schedule.position / MM
+    space.scatter(*spot[ok].T, s=6, color=REACH)
+    if (~ok).any():
+        space.scatter(*spot[~ok].T, s=12, marker="x", color=LOOP)
+    span = np.nanmax(np.ptp(cloud[np.isfinite(cloud).all(axis=1)], axis=0)[1:]) or 1.0
+    middle = np.nanmean(cloud, axis=0)
+    space.set_xlim(middle[0] - span / 2, middle[0] + span / 2)
+    space.set_ylim(middle[1] - span / 2, middle[1] + span / 2)
+    space.set_zlim(middle[2] - span / 2, middle[2] + span / 2)
+    space.set_xlabel("x [mm]")
+    space.set_ylabel("y [mm]")
+    space.set_zlabel("z [mm]", labelpad=2)
+    space.set_title("the tip in 3-D (base frame)", fontsize=9)
     step = np.arange(1, len(schedule.points) + 1)
-    for k, (name, color) in enumerate((("theta1 (wire)", REACH), ("theta2 (catheter)", LOOP))):
-        angles.plot(step, np.rad2deg(schedule.theta[:, k]), ".-", color=color, label=name)
+    for k, (name, color, style) in enumerate(
+        (("theta1 (wire)", REACH, "o-"), ("theta2 (catheter)", LOOP, ".--"))
+    ):
+        angles.plot(step, np.rad2deg(schedule.theta[:, k]), style, ms=3, color=color, label=name)
     angles.set_xlabel("step along the path")
     angles.set_ylabel("ring angle [deg]")
     angles.grid(alpha=0.3)
     angles.legend(fontsize=8)
     angles.set_title("schedule of ring angles", fontsize=9)
-    fig.tight_layout()
     _save(fig, path)
 
 

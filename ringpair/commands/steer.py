@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
@@ -11,7 +13,16 @@ from rich.table import Table
 
 from cad.layout import ActuatorSpec
 from design.model import RingPairModel
-from design.paths import PathSchedule, circle, ellipse, follow, line, workspace_center
+from design.paths import (
+    PathSchedule,
+    circle,
+    ellipse,
+    evaluate,
+    follow,
+    largest_ellipse,
+    line,
+    workspace_center,
+)
 from design.records import Design
 from design.steering import REACHED, Steering, steer
 from design.units import MM
@@ -71,6 +82,8 @@ PATH_COLUMNS = (
 PATH_POINTS = {"circle": 72, "ellipse": 72, "line": 25}
 """Points along a path unless --points says otherwise."""
 MAX_PATH_POINTS = 2000
+LARGEST_POINTS = 48
+"""Points along the largest ellipse (each size tried is steered and driven)."""
 
 
 def parse_target(text: str, where: str) -> tuple[float, float]:
@@ -151,8 +164,9 @@ def steer_rows(result: Steering) -> list[dict]:
     metavar="SPEC",
     default=None,
     help="Drive the tip along a path: circle:R, ellipse:A,B (semi-axes along y and z), "
-    "line:Y1,Z1,Y2,Z2 (mm), or a CSV of points (columns y_mm, z_mm, in order). Writes a "
-    "schedule of ring angles and knob turns, and its plot.",
+    "line:Y1,Z1,Y2,Z2 (mm), ellipse:largest (the largest ellipse about the workspace's "
+    "centre that the tip can be driven around), or a CSV of points (columns y_mm, z_mm, in "
+    "order). Writes a schedule of ring angles and knob turns, and its plot.",
 )
 @click.option(
     "--points",
@@ -340,23 +354,30 @@ def _steer_path(
         inputs=[design, csv_path],
     )
     params = model.parameters(d)
-    with console.status("steering along the path (the first run on a machine compiles the model)"):
+    schedule: PathSchedule | None = None
+    with (
+        console.status("steering along the path (the first run on a machine compiles the model)"),
+        _as_user_error("--path"),
+    ):
         if csv_path is not None:
             wanted = np.array(read_targets(csv_path))
             if len(wanted) < 2:
                 raise UserError(f"{csv_path}: a path needs at least two points")
             if len(wanted) > MAX_PATH_POINTS:
                 raise UserError(f"{csv_path}: {len(wanted):,} points; at most {MAX_PATH_POINTS:,}")
+        elif spec.replace(" ", "").lower() == "ellipse:largest":
+            if center is not None:
+                raise UserError("--center: the largest ellipse is about the workspace's centre")
+            schedule = largest_ellipse(model, params, count or LARGEST_POINTS)
+            wanted = schedule.points / MM
         else:
             if center is None and not spec.lower().startswith("line"):
                 y, z = workspace_center(model, params)
                 center = (y / MM, z / MM)
             wanted, closed = parse_path(spec, count, center)
         _within_reach(d, [tuple(p) for p in wanted])
-        try:
+        if schedule is None:
             schedule = follow(model, params, wanted * MM, closed=closed)
-        except ValueError as exc:
-            raise UserError(f"--path: {exc}") from None
     ratio = ActuatorSpec().drive.ratio
     rows = path_rows(schedule, ratio)
     write_csv(
@@ -375,6 +396,16 @@ def _steer_path(
     console.print(f"wrote {out} ({len(rows)} steps) and {picture}")
 
 
+@contextmanager
+def _as_user_error(option: str) -> Iterator[None]:
+    """What the solver cannot do with the input (no workspace, no state near a point) is
+    said as the option's error."""
+    try:
+        yield
+    except ValueError as exc:
+        raise UserError(f"{option}: {exc}") from None
+
+
 def _summary(schedule: PathSchedule, ratio: float) -> str:
     """What the drive along the path gave, in plain sentences."""
     turns = np.rad2deg(schedule.rotation)
@@ -383,6 +414,13 @@ def _summary(schedule: PathSchedule, ratio: float) -> str:
         f"{len(schedule.points)} points; rings turned {turns[0]:.1f} deg (wire) and "
         f"{turns[1]:.1f} deg (catheter) in all: {knobs[0]:.1f} and {knobs[1]:.1f} knob turns."
     ]
+    if schedule.closed:
+        e = evaluate(schedule)
+        lines.append(
+            f"Around the path the tip deflects at most {e.max_y / MM:.1f} mm along y and "
+            f"{e.max_z / MM:.1f} mm along z, {e.mean_deflection / MM:.1f} mm on average; RMS "
+            f"distance to the ellipse fitted to it {e.rms_to_ellipse / MM:.3f} mm."
+        )
     if schedule.followed:
         lines.append(
             f"FOLLOWED: the driven tip passes every point (within {np.max(schedule.error) / MM:.1e}"

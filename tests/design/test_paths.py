@@ -22,7 +22,7 @@ from setups import random_design
 from design.designfile import default_design, design_from_dict, design_to_dict
 from design.equilibrium import solve_equilibria
 from design.model import DEFAULT_EFFECTS, model_for
-from design.paths import TIE, _choose, circle, follow, line
+from design.paths import TIE, _choose, circle, evaluate, follow, largest_ellipse, line
 from design.steering import REACHED
 
 EFFECTS = (frozenset(), DEFAULT_EFFECTS, frozenset({"torsion"}), frozenset({"near_field"}))
@@ -184,3 +184,20 @@ def test_path_input_is_checked():
         follow(model, params, np.array([[0.0, 0.0]]))
     with pytest.raises(ValueError, match="finite"):
         follow(model, params, np.array([[0.0, 0.0], [np.nan, 0.0]]))
+
+
+def test_largest_ellipse_of_an_axisymmetric_set_up_is_its_rim_circle():
+    """The demonstrator with the baseline model is axisymmetric: its rim (parallel rings)
+    is a circle about the axis, the largest ellipse it is driven around is that circle,
+    and the paper's numbers follow: deflection along y = along z = mean deflection = the
+    rim's radius, RMS distance to the fitted ellipse zero."""
+    model = model_for(frozenset())
+    params = model.parameters(default_design())
+    rim = solve_equilibria(model, params, np.array([0.0]), np.array([0.0])).position[0, 1:]
+    radius = float(np.hypot(*rim))
+    schedule = largest_ellipse(model, params, count=24)
+    assert schedule.followed
+    np.testing.assert_allclose(np.linalg.norm(schedule.points, axis=1), radius, rtol=1e-3)
+    e = evaluate(schedule)
+    np.testing.assert_allclose([e.max_y, e.max_z, e.mean_deflection], radius, rtol=1e-3)
+    assert e.rms_to_ellipse < 1e-9

@@ -121,3 +121,21 @@ def test_steer_path_refuses_bad_paths_with_one_message(tmp_path, run, args, mess
     assert result.exit_code == 2, result.output
     assert message in " ".join(result.output.split()) and "Traceback" not in result.output
     assert not out.exists()
+
+
+def test_steer_largest_ellipse_reports_the_papers_numbers(tmp_path, run):
+    out = tmp_path / "e.csv"
+    result = run(
+        "steer",
+        "--effects",
+        "none",
+        "--path",
+        "ellipse:largest",
+        "--points",
+        "24",
+        "--out",
+        str(out),
+    )
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    assert "FOLLOWED" in text and "mm on average; RMS distance to the ellipse fitted" in text
