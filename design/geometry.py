@@ -1,10 +1,14 @@
 """Geometry of the set-up shared by the model, the NLP, design-file checks, the workspace
 and the CAD: where the rest tip, the rings and the external magnet are, and how far apart.
 
-Base frame: origin at the clamp, +x along the straight robot. The proximal ring's centre
-is the rod tip (s = L); the distal ring's lies one centre spacing (ring length + gap)
-further along the tip tangent. The external magnet's distance is measured from the rest
-tip, so a study moves the magnet along the line from the rest tip through its centre.
+Base frame: origin at the clamp, +x along the straight robot. The proximal ring's centre,
+the tracked tip, lies at s = L (``robot.free_length``); the distal ring's lies one centre
+spacing (ring length + gap) further along the tip tangent. In the paper's baseline the
+proximal ring's centre is the rod's end; with the printed tip (:mod:`design.mounting`,
+model effect ``printed_tip``) the rod ends ``rigid_offset`` before it and a rigid segment
+carries the rings, so the straight robot's tracked tip is at s = L either way. The external
+magnet's distance is measured from the rest tip, so a study moves the magnet along the line
+from the rest tip through its centre.
 
 Each function takes numbers (numpy arrays, broadcasting over leading axes) or CasADi
 expressions alike. SI units are used for all inputs and outputs.

@@ -93,7 +93,7 @@ GROUPS: dict[str, tuple[float, str, str]] = {
     "wire_in_catheter": (MM, "mm", "catheter bore minus wire OD"),
     "ring_wall": (MM, "mm", "radial wall of the rings"),
     "catheter_wall": (MM, "mm", "radial wall of the catheter"),
-    "ring_diameter": (MM, "mm", "ring outer diameter"),
+    "ring_diameter": (MM, "mm", "tip outer diameter (printed pieces with printed_tip)"),
     "catheter_diameter": (MM, "mm", "catheter outer diameter"),
     "epsilon.catheter_outer_diameter": (MM, "mm", "catheter OD (Pareto bound)"),
     "epsilon.external_distance": (MM, "mm", "external magnet distance (Pareto bound)"),
@@ -213,12 +213,15 @@ def core(shape: NlpShape) -> Core:
         if k_par <= k < k_par + shape.neutral_configurations:
             rows.append(("neutral", ca.sqrt(ca.sumsqr(deflection[-1]) + TINY**2)))
     wire = s["wire_outer_diameter"]
+    printed = "printed_tip" in shape.effects
+    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
     rows += [
         ("ring_on_wire", s["magnet_inner_diameter"] - wire),
         ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
         ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
         ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
-        ("ring_diameter", s["magnet_outer_diameter"]),
+        # the printed tip's outer diameter (design.mounting) where the model has it
+        ("ring_diameter", tip_diameter),
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
     volume = 2 * ring_volume(
