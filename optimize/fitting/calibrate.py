@@ -65,6 +65,7 @@ __all__ = [
     "PAPER_STIFFNESS_GRID",
     "SENSITIVE",
     "CalibrationResult",
+    "UnsolvedStart",
     "CrossValidation",
     "FreeParameter",
     "GridResult",
@@ -154,6 +155,10 @@ def _check_free(free: Sequence[str]) -> tuple[str, ...]:
 
 
 # ------------------------------------------------------------------------ calibration
+
+
+class UnsolvedStart(ValueError):
+    """Too few configurations have an equilibrium where a fit would start."""
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:
@@ -261,8 +266,11 @@ class _Problem:
         nominal_u: np.ndarray,
     ) -> None:
         self.model, self.base, self.names, self.m = model, base, names, m
-        self.ordered, self.priors, self.nominal_u = ordered, priors, nominal_u
+        self.ordered = ordered
         self.spec = [FREE_PARAMETERS[n] for n in names]
+        # Gaussian penalty rows (u - centre) / width, fit units; an infinite width: none.
+        self.prior_centre = nominal_u.copy()
+        self.prior_width = np.array([s.prior if priors else np.inf for s in self.spec])
         self.p0 = np.array([base[index(n)] for n in names])
         self.cols = [SENSITIVE.index(n) for n in names]
         self.idx = [index(n) for n in names]
@@ -326,8 +334,8 @@ class _Problem:
         r_ang = _wrap(out[:, 3:] - self.m.tip_angles) / TIP_ANGLE_SIGMA
         r_ang = np.where(np.isfinite(r_ang), r_ang, 0.0)
         parts = [r_pos[self.pos_mask], r_ang[self.ang_mask]]
-        if self.priors:
-            parts.append((u - self.nominal_u) / np.array([s.prior for s in self.spec]))
+        rows = np.isfinite(self.prior_width)
+        parts.append((u[rows] - self.prior_centre[rows]) / self.prior_width[rows])
         return np.concatenate(parts)
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
@@ -337,8 +345,8 @@ class _Problem:
         j_pos = d[:, :3, :] / self.sigma[:, None, None]
         j_ang = d[:, 3:, :] / TIP_ANGLE_SIGMA
         parts = [j_pos[self.pos_mask], j_ang[self.ang_mask]]
-        if self.priors:
-            parts.append(np.diag(1 / np.array([s.prior for s in self.spec])))
+        rows = np.isfinite(self.prior_width)
+        parts.append(np.diag(1 / self.prior_width)[rows])
         return np.vstack(parts)
 
     def n_data(self) -> int:
@@ -359,6 +367,8 @@ def calibrate(
     ordered: bool | Literal["driven"] | None = None,
     tip_angles: bool = True,
     max_nfev: int | None = None,
+    min_solved: float = 0.0,
+    anchor: Mapping[str, tuple[float, float]] | None = None,
 ) -> CalibrationResult:
     """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
 
@@ -373,6 +383,13 @@ def calibrate(
     sigma : one-sigma position uncertainty for rows whose data give none. [m]
     ordered : see :func:`predict`.
     tip_angles : also fit measured tip angles (sigma TIP_ANGLE_SIGMA) where present.
+    max_nfev : model evaluations at most (default 50 per free parameter and one).
+    anchor : free parameter -> (centre, width) [SI]: a Gaussian penalty row
+        (value - centre) / width on the weighted residuals' scale (e.g. a fold of a
+        cross-validation kept near the fit of all the data, :func:`cross_validate`).
+    min_solved : the fraction of fitted rows that must have an equilibrium at the start;
+        below it :class:`UnsolvedStart` is raised before any fitting (a least-squares fit
+        from a start where most rows have no state rarely finds one). [-]
     """
     t0 = time.perf_counter()
     model = model_for(frozenset(effects))
@@ -394,6 +411,13 @@ def calibrate(
     prob = _Problem(
         model, base, names, m, fit_rows, s_rows, ordered, priors, tip_angles, np.zeros(len(names))
     )
+    for name, (centre, width) in (anchor or {}).items():
+        j, spec = names.index(name), FREE_PARAMETERS[name]
+        log = spec.kind == "log"
+        prob.prior_centre[j] = (
+            np.log(centre / nominal[name]) if log else (centre - nominal[name]) / spec.step
+        )
+        prob.prior_width[j] = width / centre if log else width / spec.step
     lo, hi = prob.bounds()
     u0 = np.array(
         [
@@ -412,6 +436,13 @@ def calibrate(
             f"{prob.n_data()} measured coordinates cannot determine {len(names)} parameters"
         )
     dof = max(prob.n_data() - len(names), 1)
+    if min_solved > 0:
+        solved = prob.evaluate(u0)[2].equilibria.converged[fit_rows]
+        if solved.mean() < min_solved:
+            raise UnsolvedStart(
+                f"the {model.name} model has no equilibrium for {solved.size - solved.sum()} "
+                f"of {solved.size} configurations at the start"
+            )
     # With priors, the weight of the data against them needs the noise: when the data do
     # not give it, estimate it from a first fit's residuals and fit again.
     noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
@@ -569,4 +600,3 @@ def cross_validate(
         folds=folds,
         unconverged=int(np.count_nonzero(~ok)),
     )
-

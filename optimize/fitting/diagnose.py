@@ -51,6 +51,7 @@ from optimize.fitting.calibrate import (
     EFFECT_FREE,
     FREE_PARAMETERS,
     CalibrationResult,
+    UnsolvedStart,
     calibrate,
     cross_validate,
     default_free,
@@ -89,6 +90,18 @@ SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
 SCREEN_EVALUATIONS = 12
 """Model evaluations of a screening fit (a candidate's BIC before it is fitted in full)."""
+MIN_SOLVED = 0.5
+"""A screening fit skips a start where fewer than this fraction of the rows have a state
+(:class:`optimize.fitting.calibrate.UnsolvedStart`). [-]"""
+FOLD_ANCHOR = 3.0
+"""A fold of the cross-validation fits its parameters under a Gaussian penalty centred on
+the fit of all the data, this many of its standard errors wide. Without it, a fold of a
+few configurations can wander along a direction the full data barely fix (e.g. the
+magnet's height seen from above) to where its held-out configurations lie on another
+branch of a multistable robot, and the held-out error then measures that jump, not the
+model. [-]"""
+FOLD_EVALUATIONS = 25
+"""Model evaluations of a fold's fit at most (it starts at the fit of all the data)."""
 NOISE_P = 1e-3
 """With stated sigmas, residuals whose chi-square p-value is above this are noise."""
 
@@ -132,6 +145,8 @@ def _fit(
         return not (same_solved and np.nanmax(np.abs(fast - driven), initial=0.0) < 1e-6)
 
     options: dict[str, object] = {"sigma": sigma, "max_nfev": max_nfev}
+    if max_nfev is not None:  # a screen: skip starts where most rows have no state
+        options["min_solved"] = MIN_SOLVED
 
     def fit(start: Mapping[str, float] | None, path: bool | Literal["driven"]) -> Fitted:
         cal = calibrate(design, m, effects, free, initial=start, ordered=path, **options)  # type: ignore[arg-type]
@@ -141,10 +156,15 @@ def _fit(
     # estimate; and a fit along the path from the start itself if the path matters there
     # (the fast fit can run into a region where it no longer does, e.g. a stiff rod).
     fits: list[Fitted] = []
+    skipped: list[UnsolvedStart] = []
     for s in starts:
         values = {} if s is None else s if isinstance(s, Mapping) else s.estimate
         initial = {n: v for n, v in values.items() if n in free} or None
-        cal, path = fit(initial, mode)
+        try:
+            cal, path = fit(initial, mode)
+        except UnsolvedStart as exc:
+            skipped.append(exc)
+            continue
         if path_matters(cal.params):
             cal, path = fit({n: cal.estimate[n] for n in free}, "driven")
         fits.append((cal, path))
@@ -153,6 +173,8 @@ def _fit(
             start_params[index(n)] = v
         if path_matters(start_params):
             fits.append(fit(initial, "driven"))
+    if not fits:
+        raise skipped[0]
     cal, path = min(fits, key=lambda f: f[0].chi2 if f[0].unconverged == 0 else math.inf)
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
         start = _scan(model, m, cal, free)
@@ -167,6 +189,15 @@ def _fit(
     rss = math.inf if unsolved else float(np.nansum(cal.residuals**2))
     cv_rmse = math.nan
     if cv:
+        # Each fold is kept near the fit of all the data (FOLD_ANCHOR).
+        scale = math.sqrt(cal.chi2 / cal.dof) if cal.chi2 > 0 else 1.0
+        error = cal.standard_error
+        options["max_nfev"] = FOLD_EVALUATIONS
+        options["anchor"] = {
+            n: (cal.estimate[n], FOLD_ANCHOR * error[n] / scale)
+            for n in free
+            if np.isfinite(error[n]) and error[n] > 0
+        }
         cv_rmse = cross_validate(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
         ).rmse_mm
