@@ -178,3 +178,16 @@ def test_mounting_must_be_a_table(demonstrator_doc):
     doc["tip"]["mounting"] = 3
     with pytest.raises(DesignError, match=r"\[tip.mounting\] must be a table"):
         design_from_dict(doc)
+
+
+def test_locked_parallel_example_reads_its_stops_and_pretwist():
+    # examples/locked_parallel.toml: the demonstrator locked parallel as in the paper.
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "locked_parallel.toml"
+    m = load_design(path).tip.mounting
+    assert (m.process, m.stop_angle, m.pretwist) == (
+        "resin",
+        pytest.approx(np.pi),
+        pytest.approx(np.deg2rad(-40.0)),
+    )

@@ -37,6 +37,7 @@ def test_parse_effects():
     assert parse_effects("all") == frozenset(available_effects()) == frozenset(EFFECTS)
     assert parse_effects("default") == DEFAULT_EFFECTS < frozenset(EFFECTS)
     assert parse_effects("torsion, gravity") == {"torsion", "gravity"}
+    assert parse_effects("default,torsion") == DEFAULT_EFFECTS | {"torsion"}
     with pytest.raises(ValueError, match="unknown model effect 'twist'"):
         parse_effects("torsion,twist")
 
