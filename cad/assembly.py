@@ -3,7 +3,7 @@
 CAD works in millimetres. The assembly frame is the design's base frame in mm: origin at
 the clamped base (the tip of the front gear shaft's nose, where the catheter leaves the
 actuator), +x along the undeformed robot, z up. The proximal ring's centre sits at
-x = free length, the distal ring's one centre spacing further (``spec/formats.md``).
+x = free length, the distal ring's one centre spacing further (``docs/formats.md``).
 The pose shown: theta2 = 0 and theta1 in the middle of the rotation limits.
 
 Printed parts carry their print frame; reference bodies (ring magnets, catheter, wire)
