@@ -177,6 +177,27 @@ class MountingPieces:
         return out[0], out[1]
 
 
+    def describe(self, process: PrintProcess) -> list[str]:
+        """Lines for reports: the rules the pieces were made with (walls and clearances),
+        what the model takes from them, and what each groove reads. [mm, g, deg]"""
+        d, g = self.dims, self.geometry
+        lines = [
+            f"tip pieces ({process.name}): wall {d.wall:g} mm (process minimum "
+            f"{process.min_wall_mm:g}), fit allowance {process.fit_allowance_mm:g} mm, running "
+            f"clearance {process.running_clearance_mm:g} mm; outer diameter "
+            f"{d.outer_diameter:.3g} mm, rigid segment {mm(g.rigid_length):.3g} mm (tracked "
+            f"point {mm(g.rigid_offset):.3g} mm along it), masses "
+            f"{g.proximal_mass * 1e3:.3g} g + {g.distal_mass * 1e3:.3g} g; stops "
+            f"0-{d.stop_angle_deg:g} deg",
+        ]
+        for t in self.tracking():
+            lines.append(
+                f"{t.piece} groove: pitch {t.pitch_mm:.3g} mm, {t.readout_mm_per_deg:.4f} mm "
+                f"per deg, reads {t.range_deg:.0f} deg over {t.travel_mm:.3g} mm"
+            )
+        return lines
+
+
 def tip_geometry_for(design: Design, process: PrintProcess, spec: MountingSpec) -> TipGeometry:
     """The one tip geometry (:func:`design.mounting.tip_geometry`) of ``design`` printed
     with ``process``, with the spec's choices. [SI]"""

@@ -271,3 +271,9 @@ def test_tip_assembly_extent_is_the_rigid_segment(demonstrator: Design, resin_pi
     start = (demonstrator.robot.free_length - g.rigid_offset) * 1e3
     assert bb.xmin == pytest.approx(start, abs=1e-6)
     assert bb.xmax - bb.xmin == pytest.approx(g.rigid_length * 1e3, rel=1e-6)
+
+
+def test_pieces_state_their_walls_clearances_and_readout(resin_pieces) -> None:
+    text = "\n".join(resin_pieces.describe(RESIN))
+    for words in ("resin", "wall 0.5 mm", "running clearance 0.1 mm", "mm per deg", "180 deg"):
+        assert words in text
