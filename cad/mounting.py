@@ -176,7 +176,6 @@ class MountingPieces:
             )
         return out[0], out[1]
 
-
     def describe(self, process: PrintProcess) -> list[str]:
         """Lines for reports: the rules the pieces were made with (walls and clearances),
         what the model takes from them, and what each groove reads. [mm, g, deg]"""
