@@ -110,7 +110,16 @@ def diagnose(
             update(description=stage)
             err_console.print(f"{time.perf_counter() - t0:6.1f} s {stage}", style="dim")
 
-        result = run_diagnosis(d, m, k=folds, seed=seed, progress=say)
+        try:
+            result = run_diagnosis(d, m, k=folds, seed=seed, progress=say)
+        except (ArithmeticError, RuntimeError, np.linalg.LinAlgError) as exc:
+            # the calibrated baseline could not be fitted (a candidate's failure is in
+            # the result): one message, exit 1
+            text = " ".join(str(exc).split())
+            raise click.ClickException(
+                f"{m.source}: the diagnosis failed fitting the baseline: "
+                f"{type(exc).__name__}: {text}"
+            ) from None
     missed = misses(d, m, result.final.calibration)
     later = fit_warnings(d, m, result.final.calibration)
     doc = {**result.to_json(), "warnings": notes + later}

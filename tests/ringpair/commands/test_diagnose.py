@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import json
 
 import numpy as np
@@ -30,8 +31,16 @@ def test_diagnose_writes_the_spec_json_and_report(tmp_path, run):
     assert lower <= doc["causes"][0]["params"]["tip_mass_g"] <= upper
     assert doc["final"]["interval"]["tip_mass_g"] == [lower, upper]
     assert "gravity" in result.output
+    # every model tried, with its verdict, in the JSON, the table and the page
+    tried = doc["candidates"]
+    assert tried["gravity"]["verdict"].startswith("accepted: BIC")
+    assert all(c["verdict"] for c in tried.values())
+    assert {"rmse_mm", "cv_rmse_mm", "bic", "params"} <= set(tried["gravity"])
+    assert "every model tried" in result.output
+    assert set(doc["power"]) <= {"torsion", "hysteresis", "near_field", "large_deflection"}
     page = (tmp_path / "r" / "diagnosis.html").read_text()
     assert page.count("data:image/png;base64,") == 2 and "gravity" in page
+    assert "Every model tried" in page and html.escape(tried["gravity"]["verdict"]) in page
     assert "profile interval" in page and f"{lower:.4g} to {upper:.4g}" in page
     img = np.asarray(Image.open(tmp_path / "r" / "residuals.png").convert("L"))
     assert (img < 128).mean() > 0.005
