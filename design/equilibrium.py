@@ -79,10 +79,10 @@ LEAP_STEPS = 2
 LEAP_CORRECTIONS = 4
 """Where the ramp of the linear rod needs at most LEAP_STEPS equal steps (the usual case
 away from folds), its predictors, LEAP_CORRECTIONS Newton corrections per step and the
-exact check at full load run in one compiled call (``leap1``, ``leap2``, ...), accepted by
-the ramp's own tests; this halves the time per configuration. (For the large-deflection
-rod the exact check costs four Newton steps and most ramps need more than one step, so
-the adaptive ramp is as fast.)"""
+exact check at full load run in one compiled call (``leap1``, ``leap2``, ...), which
+applies the ramp's own tests and returns only the verdict and the state; this halves the
+time per configuration. (For the large-deflection rod the linear predictor misses by more
+than half in most one-step ramps, so the adaptive ramp is as fast.)"""
 TARGET_CONTRACTION = CONTRACTION / 2
 """The step control aims at this first contraction: the secant predictor's error grows
 with the square of the step, and so does Newton's contraction, so the next step is the
@@ -198,11 +198,9 @@ class _Kernels:
     :class:`design.model.RingPairModel`'s;
     ``check`` (x, command, lambda, params) -> (r, exact monitor, position, frame (9,
     column-major), tip angles, clearance to the external magnet);
-    ``leap<m>`` (command, params) -> (the tangent at rest dx/dlambda; for each of m equal
-    ramp steps from rest to full load: the predictor's move, the LEAP_CORRECTIONS Newton
-    steps (stacked), the residual's infinity norm before each and, but for the last step,
-    the Newton monitor and clearance of the last correction; the state at full load and
-    ``check``'s outputs there): the ramp in one call, where it needs only m steps."""
+    ``leap<m>`` (command, params) -> (the tangent at rest dx/dlambda, taken, the state at
+    full load, ``check``'s outputs there): the ramp in m equal steps in one call, with
+    the ramp's acceptance tests (:meth:`_leap`)."""
 
     def __init__(self, model: RingPairModel) -> None:
         self.model = model
@@ -253,32 +251,66 @@ class _Kernels:
         prm: ca.SX,
         count: int,
     ) -> ca.Function:
-        x = ca.vertcat(ca.SX.zeros(model.n_rod), command)[: model.n_unknowns]
+        """``leap<count>`` (command, params) -> (the tangent at rest dx/dlambda, taken (1 or
+        0), the state at full load, ``check``'s outputs there): the ramp in ``count`` equal
+        steps, taken exactly where :func:`_ramp` would accept each step: the first
+        predicts a change of at most FIRST_DISPLACEMENT; in each, the first correction
+        stays within :func:`_near` of the prediction and each later one contracts by
+        CONTRACTION up to the first that converges (residual below the tolerance at the
+        step's load, or a step below :func:`_step_tolerance`; later ones only polish the
+        state to rounding); below full load no fold is crossed and at full load the state
+        passes the exact check; the rings stay clear of the external magnet. For the
+        linear rod (the only one with leaps) both the fold monitor and the exact one are
+        the Sylvester minors of the stiffness form, all positive where stable."""
+        n = model.n_unknowns
+        probe = np.zeros(prm.size1())
+        probe[index("free_length")] = 2.0
+        length = prm[index("free_length")]
+        scale = ca.vertcat(*[length if v == 2.0 else 1 for v in model.unknown_scale(probe)])
+
+        def norm(v: ca.SX) -> ca.SX:
+            return ca.mmax(ca.fabs(v) / scale)
+
+        def positive(v: ca.SX) -> ca.SX:
+            return ca.mmin(v) > 0
+
+        x = ca.vertcat(ca.SX.zeros(model.n_rod), command)[:n]
         # The tangent at rest: (dr/dx)^-1 = K^-1 there, and r is linear in the load (but
         # for the rings' mutual torque, which goes with its square), so it is minus the
         # relaxation direction at full load.
         tangent = -relaxation.call([x, command, 1, prm])[0]
-        before = None
+        ok = norm(tangent) <= count * FIRST_DISPLACEMENT
+        before, rest_tangent = None, tangent
         h = 1.0 / count
-        outs = [tangent]
         for k in range(1, count + 1):
             move = h * tangent
             if before is not None:  # the ramp's second-order predictor
                 move += 0.5 * h * (tangent - before)
-            outs.append(move)
             x = x + move
-            steps, residuals = [], []
+            lam = k * h
+            tol = TOLERANCE if lam >= 1.0 else RAMP_TOLERANCE
+            small = float(_step_tolerance(model, np.array([lam]))[0])
+            going, converged = ca.SX(1), ca.SX(0)
+            bound = ca.fmax(CORRECTION_RATIO * norm(move), MIN_CORRECTION)  # _near
             for _ in range(LEAP_CORRECTIONS):
-                r, step, load_tangent, monitor, clearance = newton.call([x, command, k * h, prm])
-                steps.append(step)
-                residuals.append(ca.mmax(ca.fabs(r)))
+                r, step, load_tangent, monitor, clearance = newton.call([x, command, lam, prm])
+                done = ca.logic_or(ca.mmax(ca.fabs(r)) < tol, ca.mmax(ca.fabs(step)) < small)
+                converged = ca.logic_or(converged, ca.logic_and(going, done))
+                size = norm(step)
+                going = ca.logic_and(going, ca.logic_and(ca.logic_not(done), size <= bound))
+                bound = CONTRACTION * size
                 x = x - step
-            outs += [ca.vertcat(*steps), ca.vertcat(*residuals)]
+            ok = ca.logic_and(ok, converged)
             if k < count:
-                outs += [monitor, clearance]
+                ok = ca.logic_and(ok, ca.logic_and(positive(monitor), clearance[0] >= 0))
             before, tangent = tangent, load_tangent
-        outs += [x, *check.call([x, command, 1, prm])]
-        return ca.Function(f"leap{count}", [command, prm], outs)
+        checked = check.call([x, command, 1, prm])
+        r, monitor, clearance = checked[0], checked[1], checked[5]
+        exact = ca.logic_and(ca.mmax(ca.fabs(r)) < TOLERANCE, positive(monitor))
+        ok = ca.logic_and(ok, ca.logic_and(exact, clearance[0] >= 0))
+        # NaN anywhere fails every comparison in numpy, not in C's fmax: say it here.
+        ok = ca.logic_and(ok, ca.sum1(ca.fabs(ca.vertcat(x, r))) < np.inf)
+        return ca.Function(f"leap{count}", [command, prm], [rest_tangent, ok, x, *checked])
 
     def _mapped(self, function: ca.Function, size: int) -> ca.Function:
         key = (function.name(), size)
@@ -658,67 +690,20 @@ def _near(predicted: np.ndarray) -> np.ndarray:
     return np.maximum(CORRECTION_RATIO * predicted, MIN_CORRECTION)
 
 
-def _corrected(
-    model: RingPairModel,
-    steps: np.ndarray,
-    residuals: np.ndarray,
-    scale: np.ndarray,
-    near: np.ndarray,
-    lam: float,
-) -> np.ndarray:
-    """Whether the compiled Newton corrections of a ramp step (``steps`` stacked, the
-    residual's norm before each) pass :func:`_ramp`'s tests: the first within ``near``
-    of the prediction, each later one CONTRACTION of the one before, up to the first that
-    converges (residual below the tolerance at lam, or a step below
-    :func:`_step_tolerance`); later ones only polish the state to rounding."""
-    n = model.n_unknowns
-    tol = TOLERANCE if lam >= 1.0 else RAMP_TOLERANCE
-    small = _step_tolerance(model, np.array([lam]))[0]
-    going = np.ones(steps.shape[1], bool)
-    converged = np.zeros(steps.shape[1], bool)
-    bound = near
-    for k in range(LEAP_CORRECTIONS):
-        step = np.abs(steps[k * n : (k + 1) * n])
-        done = (residuals[k] < tol) | (np.max(step, axis=0) < small)
-        converged |= going & done
-        size = np.max(step / scale, axis=0)
-        going &= ~done & (size <= bound)
-        bound = CONTRACTION * size
-    return converged
-
-
 def _leap(
     model: RingPairModel,
     params: np.ndarray,
     command: np.ndarray,
-    scale: np.ndarray,
     count: int,
     checks: _Checks,
     where: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ramp in ``count`` equal steps, from the compiled ``leap<count>``: (the tangent at
-    rest (n, N), which columns it takes to full load, their states).
-
-    A column is taken exactly where :func:`_ramp` would accept each of these steps: the
-    first predicts a change of at most FIRST_DISPLACEMENT; in each, the corrections pass
-    :func:`_corrected`; below full load the monitor shows no fold crossed, and at full load
-    the state passes the exact check (converged, stable), which is put in ``checks`` at
-    ``where``; the rings stay clear of the external magnet. Other columns are left to the
-    ramp's adaptive steps."""
+    """The ramp in ``count`` equal steps, from the compiled ``leap<count>``
+    (:meth:`_Kernels._leap`): (the tangent at rest (n, N), which columns it takes to full
+    load, their states). The checks of the columns taken are put in ``checks`` at
+    ``where``; other columns are left to the ramp's adaptive steps."""
     outs = kernels(model).run(f"leap{count}", [command], params)
-    tangent, outs = outs[0], outs[1:]
-    taken = _norm(tangent, scale) <= count * FIRST_DISPLACEMENT
-    for k in range(1, count + 1):
-        move, steps, residuals = outs[:3]
-        near = _near(_norm(move, scale))
-        taken &= _corrected(model, steps, residuals, scale, near, k / count)
-        if k < count:
-            monitor, clearance = outs[3:5]
-            taken &= _fold_free(model, monitor) & (clearance[0] >= 0)
-        outs = outs[3 if k == count else 5 :]
-    x, checked = outs[0], outs[1:]
-    taken &= np.max(np.abs(checked[0]), axis=0) < TOLERANCE
-    taken &= _stable(model, checked[1]) & (checked[5][0] >= 0)
+    tangent, taken, x, checked = outs[0], outs[1][0] > 0.5, outs[2], outs[3:]
     idx = np.flatnonzero(taken)
     checks.put(where[idx], [o[:, idx] for o in checked])
     return tangent, idx, x[:, idx]
@@ -764,7 +749,7 @@ def _ramp(
             if left.size == 0:
                 break
             p = _columns(params, left)
-            t, idx, states = _leap(model, p, command[:, left], scale[:, left], count, checks, left)
+            t, idx, states = _leap(model, p, command[:, left], count, checks, left)
             if count == 1:
                 tangent[:] = t
             x[:, left[idx]], lam[left[idx]], phase[left[idx]] = states, 1.0, _DONE
@@ -1075,6 +1060,57 @@ def stable_states(
 
 
 # -------------------------------------------------------------------------- driven paths
+
+
+def drive(
+    model: RingPairModel,
+    params: np.ndarray,
+    x: np.ndarray,
+    start: np.ndarray,
+    end: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each column's state x (n, N) at commands ``start`` (2, N), driven to ``end`` (2, N)
+    [rad] in equal sub-steps of at most SUBSTEP, each solved by Newton from the state
+    before (contracting by CONTRACTION, ending on the stable side of every fold seen from
+    rest, :func:`_fold_free`, with the rings clear of the external magnet): (the states
+    at ``end``, whether every sub-step did; NaN where not). The batch form of
+    :func:`solve_sequence`'s continuation, without falls: a column that would snap
+    fails."""
+    kern = kernels(model)
+    n_cols = x.shape[1]
+    scale = _scale(model, params, n_cols)
+    x = x.copy()
+    ok = np.isfinite(x).all(axis=0)
+    n_sub = max(1, int(np.ceil(np.max(np.abs(end - start), initial=0.0) / SUBSTEP)))
+    ones = np.ones((1, n_cols))
+    tolerance = float(_step_tolerance(model, np.ones(1))[0])
+    for k in range(1, n_sub + 1):
+        command = start + (end - start) * (k / n_sub)
+        running = ok.copy()
+        done = np.zeros(n_cols, bool)
+        last = np.full(n_cols, np.inf)
+        for _ in range(MAX_CORRECTIONS + 2):
+            a = np.flatnonzero(running)
+            if a.size == 0:
+                break
+            r, step, _, monitor, clearance = kern.run(
+                "newton", [x[:, a], command[:, a], ones[:, a]], _columns(params, a)
+            )
+            size = _norm(step, scale[:, a])
+            contracting = np.isfinite(size) & (size <= CONTRACTION * last[a])
+            x[:, a] -= np.where(np.isfinite(step), step, 0.0)
+            small = (np.max(np.abs(step), axis=0) < tolerance) | (
+                np.max(np.abs(r), axis=0) < TOLERANCE
+            )
+            fine = _fold_free(model, monitor) & (clearance[0] >= 0)
+            finished = small & np.isfinite(size)
+            done[a[finished & fine]] = True
+            failed = (finished & ~fine) | (~finished & ~contracting)
+            running[a[finished | failed]] = False
+            last[a] = size
+        ok &= done
+    x[:, ~ok] = np.nan
+    return x, ok
 
 
 @lru_cache(maxsize=128)

@@ -162,16 +162,20 @@ def _seeds(
     )
     resolution = np.nanpercentile(moves, 90) if np.isfinite(moves).any() else 0.0
     rows, cells = [], []
+    tip = np.where(np.isfinite(grid_tip), grid_tip, np.inf)  # no state: infinitely far
     for start in range(0, len(targets), 128):
         t = targets[start : start + 128]
-        d = np.linalg.norm(grid_tip[None] - t[:, None, None, :], axis=-1)
-        d = np.where(np.isfinite(d), d, np.inf)
+        d = (tip[None, :, :, 0] - t[:, None, None, 0]) ** 2
+        d += (tip[None, :, :, 1] - t[:, None, None, 1]) ** 2
+        d[np.isnan(d)] = np.inf
+        # Local minima on the torus: no smaller neighbour (the grid padded periodically).
+        wrap = np.pad(d, ((0, 0), (1, 1), (1, 1)), mode="wrap")
         minimum = np.isfinite(d)
-        for di in (-1, 0, 1):
-            for dj in (-1, 0, 1):
-                if di or dj:
-                    minimum &= d <= np.roll(d, (di, dj), axis=(1, 2))
-        flat = np.where(minimum, d, np.inf).reshape(len(t), g * g)
+        for di in (0, 1, 2):
+            for dj in (0, 1, 2):
+                if di != 1 or dj != 1:
+                    minimum &= d <= wrap[:, di : di + g, dj : dj + g]
+        flat = np.sqrt(np.where(minimum, d, np.inf)).reshape(len(t), g * g)
         best = np.argsort(flat, axis=1)[:, :MAX_SEEDS]
         dist = np.take_along_axis(flat, best, axis=1)
         keep = np.isfinite(dist) & ((np.arange(best.shape[1]) < count) | (dist <= resolution))

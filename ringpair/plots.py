@@ -17,6 +17,7 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
 from design.atomic import atomic_path  # noqa: E402
 from design.branches import Branch  # noqa: E402
+from design.controllable import Controllable  # noqa: E402
 from design.equilibrium import Equilibria  # noqa: E402
 from design.paths import PathSchedule  # noqa: E402
 from design.records import Design  # noqa: E402
@@ -145,6 +146,43 @@ def plot_path(schedule: PathSchedule, path: Path, title: str) -> None:
     _save(fig, path)
 
 
+def plot_controllable(ws: Workspace, ctl: Controllable, path: Path, model: str) -> None:
+    """The controllable workspace looking along the base x axis: the grid's tips that can
+    be steered to from rest without a snap, the others, and both discs."""
+    fig, ax = plt.subplots(figsize=(6.4, 6))
+    tip = (ctl.position - ws.rest_position)[:, :, 1:] / MM
+    ok = np.isfinite(tip).all(axis=2)
+    ax.scatter(*tip[ok & ctl.controllable].T, s=4, color=REACH, label="steerable from rest")
+    behind = ok & ~ctl.controllable
+    if behind.any():
+        ax.scatter(*tip[behind].T, s=6, color=LOOP, label="only through a snap")
+    for radius, style, label in (
+        (ws.disc_radius, ":", "largest disc"),
+        (ctl.disc_radius, "--", "controllable disc"),
+    ):
+        ax.add_patch(
+            Circle(
+                (0, 0),
+                radius / MM,
+                fill=False,
+                ls=style,
+                color="k",
+                label=f"{label}, r = {radius / MM:.2f} mm",
+            )
+        )
+    ax.plot(0, 0, "k+", ms=10)
+    ax.set_xlabel("y deflection [mm]")
+    ax.set_ylabel("z deflection [mm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.set_title(
+        f"Controllable workspace ({model} model): {100 * ctl.fraction:.0f} % of the configurations",
+        fontsize=9,
+    )
+    ax.legend(loc="lower left", fontsize=8)
+    _save(fig, path)
+
+
 def plot_section(ws: Workspace, path: Path) -> None:
     """The workspace looking along the base x axis: reachable set, loops, disc, maximum."""
     fig, ax = plt.subplots(figsize=(6, 6))
@@ -226,7 +264,10 @@ def write_workspace_plots(
 
 
 def plot_branch_diagram(
-    path_states: Equilibria, others: list[Branch], load_factors: np.ndarray, title: str,
+    path_states: Equilibria,
+    others: list[Branch],
+    load_factors: np.ndarray,
+    title: str,
     path: Path,
 ) -> None:
     """A branch diagram: tip y, tip z and (with torsion) the rings' relative angle against
@@ -239,13 +280,16 @@ def plot_branch_diagram(
     ]
     if torsion:
         panels.append(
-            ("theta1 - theta2 at the tip [deg]",
-             lambda s: np.rad2deg(s.tip_angles[:, 0] - s.tip_angles[:, 1])),
+            (
+                "theta1 - theta2 at the tip [deg]",
+                lambda s: np.rad2deg(s.tip_angles[:, 0] - s.tip_angles[:, 1]),
+            ),
         )
     # A quantity that stays zero on every branch (a set-up symmetric about the x-y
     # plane) says nothing: its panel is left out.
     panels = [
-        p for p in panels
+        p
+        for p in panels
         if any(np.nanmax(np.abs(p[1](s)), initial=0.0) > FLAT for s in (path_states, *others))
     ] or panels[:1]
     fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), squeeze=False)
@@ -261,17 +305,16 @@ def plot_branch_diagram(
     for ax, (ylabel, value) in zip(axes[0], panels, strict=True):
         for branch in others:
             v = value(branch)
-            for stable, style, name in ((True, "-", "other equilibria, stable"),
-                                        (False, "--", "other equilibria, unstable")):
+            for stable, style, name in (
+                (True, "-", "other equilibria, stable"),
+                (False, "--", "other equilibria, unstable"),
+            ):
                 part = np.where(branch.stable == stable, v, np.nan)
-                ax.plot(load_factors, part, style, color="#888888", lw=1.2,
-                        label=label(name, part))
+                ax.plot(load_factors, part, style, color="#888888", lw=1.2, label=label(name, part))
         v = value(path_states)
-        ax.plot(load_factors, v, "-", color=REACH, lw=2.5,
-                label=label("the state (load ramp)", v))
+        ax.plot(load_factors, v, "-", color=REACH, lw=2.5, label=label("the state (load ramp)", v))
         snaps = np.flatnonzero(np.diff(path_states.snapped.astype(int)) > 0) + 1
-        ax.plot(load_factors[snaps], v[snaps], "v", color=LOOP, ms=8,
-                label=label("snap", v[snaps]))
+        ax.plot(load_factors[snaps], v[snaps], "v", color=LOOP, ms=8, label=label("snap", v[snaps]))
         ax.set_xlabel("load factor (magnet brought up) [-]")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)

@@ -9,6 +9,7 @@ import numpy as np
 from rich.table import Table
 
 from design.atomic import write_text
+from design.controllable import Controllable, controllable_workspace
 from design.equilibrium import solve_design
 from design.records import Design
 from design.units import MM
@@ -32,7 +33,13 @@ from ringpair.options import (
 from ringpair.tables import POSE_COLUMNS, pose_rows, write_csv
 
 FILES = (
-    "workspace.csv", "summary.json", "top.png", "side.png", "section.png", "deflection.png"
+    "workspace.csv",
+    "summary.json",
+    "top.png",
+    "side.png",
+    "section.png",
+    "deflection.png",
+    "controllable.png",
 )
 """What ``workspace`` writes in its folder."""
 
@@ -60,11 +67,13 @@ def workspace(
 
     Prints the deflection range along y and z, the largest deflection and its direction,
     the radius of the largest disc around the rest position inside the reachable set
-    (size and symmetry in one number) and the neutral (antiparallel) deflection; writes
-    workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z) and
-    deflection.png (deflection against theta1 with theta2 = 0).
+    (size and symmetry in one number), how much of that disc can be steered to from rest
+    without a snap (the controllable workspace: neighbouring configurations driven into
+    each other, from antiparallel rings) and the neutral (antiparallel) deflection; writes
+    workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z),
+    deflection.png (deflection against theta1 with theta2 = 0) and controllable.png.
     """
-    from ringpair.plots import write_workspace_plots
+    from ringpair.plots import plot_controllable, write_workspace_plots
 
     d = design_from(design)
     model = model_from(effects)
@@ -80,23 +89,32 @@ def workspace(
         ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
+    with progress("driving between neighbouring configurations (the controllable workspace)"):
+        ctl = controllable_workspace(
+            model, model.parameters(d), ws.grid, angle_grid(np.deg2rad(step)), ws.rest_position
+        )
     write_csv(
         out / "workspace.csv",
         pose_rows(ws.grid, ws.rest_position),
         POSE_COLUMNS,
         header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
     )
-    summary = workspace_summary(ws, d, step, model.name)
+    summary = workspace_summary(ws, d, step, model.name, ctl)
     write_text(out / "summary.json", json_text(summary))
     pictures = write_workspace_plots(ws, sweep, d, out)
+    plot_controllable(ws, ctl, out / "controllable.png", model.name)
+    pictures.append(out / "controllable.png")
     _print_summary(summary)
     console.print(
         f"wrote {out}/: workspace.csv, summary.json, " + ", ".join(p.name for p in pictures)
     )
 
 
-def workspace_summary(ws: Workspace, design: Design, step_deg: float, model: str) -> dict:
-    """The workspace metrics in file units (mm, deg)."""
+def workspace_summary(
+    ws: Workspace, design: Design, step_deg: float, model: str, ctl: Controllable | None = None
+) -> dict:
+    """The workspace metrics in file units (mm, deg); with ``ctl``, the controllable
+    workspace's too."""
     direction = ws.max_direction
     return {
         "design": design.name,
@@ -117,7 +135,14 @@ def workspace_summary(ws: Workspace, design: Design, step_deg: float, model: str
         "disc_radius_mm": ws.disc_radius / MM,
         "neutral_deflection_mm": ws.neutral_deflection / MM,
         "boundary_excess_mm": ws.boundary_excess / MM,
-    }
+    } | (
+        {}
+        if ctl is None
+        else {
+            "controllable_disc_radius_mm": ctl.disc_radius / MM,
+            "controllable_fraction": ctl.fraction,
+        }
+    )
 
 
 def _print_summary(s: dict) -> None:
@@ -142,5 +167,13 @@ def _print_summary(s: dict) -> None:
         "  at theta1, theta2", "{:.1f}, {:.1f} deg".format(*s["max_deflection_theta_deg"])
     )
     table.add_row("largest disc around rest (radius)", f"{s['disc_radius_mm']:.2f} mm")
+    if "controllable_disc_radius_mm" in s:
+        table.add_row(
+            "  of it steerable from rest without a snap (radius)",
+            f"{s['controllable_disc_radius_mm']:.2f} mm",
+        )
+        table.add_row(
+            "configurations steerable from rest", f"{100 * s['controllable_fraction']:.1f} %"
+        )
     table.add_row("neutral (antiparallel) deflection", f"{s['neutral_deflection_mm']:.3f} mm")
     console.print(table)

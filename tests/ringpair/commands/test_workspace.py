@@ -17,6 +17,14 @@ def test_workspace_writes_csv_summary_and_pictures(tmp_path, run, read_csv):
     assert f"{summary['max_deflection_mm']:.2f} mm" in result.output
     assert summary["disc_radius_mm"] == pytest.approx(summary["max_deflection_mm"], rel=1e-4)
     assert len(read_csv(tmp_path / "ws" / "workspace.csv")) == 24 * 24
-    for name in ("top", "side", "section", "deflection"):
+    # The demonstrator's baseline never snaps: all of it is steerable from rest, and the
+    # controllable disc is the disc less the 15-deg grid's chord (R (1 - cos 7.5 deg)).
+    assert summary["controllable_fraction"] == 1.0
+    chord = summary["disc_radius_mm"] * (1 - np.cos(np.deg2rad(7.5)))
+    assert summary["controllable_disc_radius_mm"] == pytest.approx(
+        summary["disc_radius_mm"] - chord, abs=0.15
+    )
+    assert "steerable from rest without a snap" in " ".join(result.output.split())
+    for name in ("top", "side", "section", "deflection", "controllable"):
         img = np.asarray(Image.open(tmp_path / "ws" / f"{name}.png").convert("L"))
         assert img.shape[0] > 200 and (img < 128).mean() > 0.005, name  # drawn, not blank

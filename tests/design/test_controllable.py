@@ -1,0 +1,112 @@
+"""The controllable workspace (design.controllable), on set-ups drawn from the whole design
+space (tests/support/setups.py), against separately written solves.
+
+Truths used: a link between neighbouring configurations holds exactly when the driven-path
+solver (solve_sequence, written separately: one configuration at a time, with falls and
+snap detection) drives the robot from one to the other without a snap into the other's
+own state; the controllable set is what a plain graph search from the antiparallel rings
+reaches along the links; where nothing snaps (the demonstrator's axisymmetric baseline)
+every configuration is controllable and the controllable disc is the workspace's disc (to
+the grid's chord and the raster's pixel). The seed of each random case is in its test id.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+import pytest
+from setups import random_design
+
+from design.controllable import MOVES, _reached, controllable_workspace
+from design.designfile import default_design
+from design.equilibrium import solve_sequence
+from design.model import model_for
+from design.workspace import angle_grid, sweep_workspace
+
+STEP = np.deg2rad(10.0)
+
+
+def _graph_search(linked: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """Breadth-first search node by node over the links (a plain queue)."""
+    g = start.shape[0]
+    seen = start.copy()
+    queue = deque(zip(*np.nonzero(start), strict=True))
+    while queue:
+        i, j = queue.popleft()
+        for k, (di, dj) in enumerate(MOVES):
+            n = ((i + di) % g, (j + dj) % g)
+            if linked[k, i, j] and not seen[n]:
+                seen[n] = True
+                queue.append(n)
+    return seen
+
+
+@pytest.mark.parametrize("seed", range(8400, 8410))
+def test_reached_is_what_a_graph_search_reaches(seed):
+    rng = np.random.default_rng(seed)
+    g = int(rng.integers(3, 12))
+    linked = rng.random((4, g, g)) < rng.uniform(0.2, 0.9)
+    start = rng.random((g, g)) < 0.1
+    np.testing.assert_array_equal(_reached(linked, start), _graph_search(linked, start))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("seed", "effects"),
+    [(8302, {"torsion"}), (8308, {"torsion"}), (8309, {"near_field"}), (8306, {"near_field"})],
+)
+def test_links_are_the_driven_path_solvers_snap_free_moves(seed, effects):
+    """Drawn set-ups with snaps (seeds chosen where links fail): up to 12 links that hold
+    and 12 that fail, each driven separately by solve_sequence from the node's state to
+    the neighbour's command; a link holds iff that drive does not snap and ends in the
+    neighbour's own state."""
+    rng = np.random.default_rng(seed)
+    design = random_design(rng)
+    model = model_for(frozenset(effects))
+    params = model.parameters(design)
+    ws = sweep_workspace(design, STEP, model)
+    angles = angle_grid(STEP)
+    ctl = controllable_workspace(model, params, ws.grid, angles, ws.rest_position)
+    g = len(angles)
+    stable = ws.grid.stable.reshape(g, g)
+    pick = np.random.default_rng(seed + 1)
+    checked = {True: 0, False: 0}
+    for k, i, j in pick.permutation(np.argwhere(np.ones((4, g, g), bool))):
+        di, dj = MOVES[k]
+        ti, tj = (i + di) % g, (j + dj) % g
+        holds = bool(ctl.linked[k, i, j])
+        if not (stable[i, j] and stable[ti, tj]) or checked[holds] >= 12:
+            continue
+        start = np.array([angles[i], angles[j]])
+        end = start + np.array([di, dj]) * STEP
+        eq = solve_sequence(model, params, [start[0], end[0]], [start[1], end[1]])
+        own = ws.grid.position.reshape(g, g, 3)[ti, tj]
+        lands = (
+            eq.stable[1] and np.linalg.norm(eq.position[1] - own) < 1e-6 * design.robot.free_length
+        )
+        assert holds == (lands and not eq.snapped[1]), (
+            f"seed {seed}: link {k} from ({i}, {j}) says {holds}; solve_sequence "
+            f"snapped={eq.snapped[1]}, lands={lands}"
+        )
+        checked[holds] += 1
+        if min(checked.values()) >= 12:
+            break
+    assert checked[True] > 0 and checked[False] > 0, f"seed {seed}: {checked}"
+
+
+def test_demonstrator_baseline_is_all_controllable_and_its_disc_is_the_workspace_disc():
+    """Nothing snaps on the demonstrator's axisymmetric baseline: every configuration is
+    controllable, and the controllable disc is the workspace's disc radius less at most the
+    5-deg grid's chord (R (1 - cos 2.5 deg)) and a raster pixel."""
+    design = default_design()
+    model = model_for(frozenset())
+    step = np.deg2rad(5.0)
+    ws = sweep_workspace(design, step, model)
+    ctl = controllable_workspace(
+        model, model.parameters(design), ws.grid, angle_grid(step), ws.rest_position
+    )
+    assert ctl.fraction == 1.0 and ctl.linked.all()
+    chord = ws.disc_radius * (1 - np.cos(step / 2))
+    pixel = 2 * 1.05 * ws.max_deflection / 400
+    assert ws.disc_radius - chord - 2 * pixel <= ctl.disc_radius <= ws.disc_radius
