@@ -296,7 +296,9 @@ def run_study(
     _stage(
         run,
         "cad",
-        f"CAD of the recommended design ({BEST_DESIGN}), {cad_process} print: parts, checks"
+        f"CAD of the recommended design ({BEST_DESIGN}), {cad_process} print"
+        + _tip_note(chosen, cad_process)
+        + ": parts, checks"
         + (", renders" if render else ""),
         (*key, cad_process, render),
         lambda: _cad_summary(build_parts(chosen, out / "cad", cad_process, render=render)),
@@ -313,6 +315,14 @@ def run_study(
             w,
         )
     return run
+
+
+def _tip_note(design: Design, process: str) -> str:
+    """Where the CAD prints the tip pieces otherwise than the model assumes, say so."""
+    modelled = design.tip.mounting.process
+    if modelled == process:
+        return ""
+    return f" (the model assumes {modelled} tip pieces: tip.mounting.process)"
 
 
 def write_pareto_csvs(pareto: ParetoResult, study: Study, folder: Path) -> list[Path]:
