@@ -465,11 +465,37 @@ def diagnose(
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
     def attempt(effects: frozenset[str], cv: bool, starts: Starts, **options: int) -> Candidate:
-        """A fit of ``effects`` as a candidate on top of ``current`` (failure reported)."""
+        """A fit of ``effects`` as a candidate on top of ``current`` (failure reported).
+        Where the model has no state for most rows at every start (the current model's
+        parameters, bent to mimic the effect, can put the robot where the effect leaves
+        no equilibrium, e.g. pulled into a near magnet), it starts from the nominal design."""
         try:
-            f = _fit(
-                design, m, effects, k=k, seed=seed, cv=cv, starts=starts, sigma=sigma, **options
-            )
+            try:
+                f = _fit(
+                    design,
+                    m,
+                    effects,
+                    k=k,
+                    seed=seed,
+                    cv=cv,
+                    starts=starts,
+                    sigma=sigma,
+                    **options,
+                )
+            except UnsolvedStart:
+                if None in starts:
+                    raise
+                f = _fit(
+                    design,
+                    m,
+                    effects,
+                    k=k,
+                    seed=seed,
+                    cv=cv,
+                    starts=[None],
+                    sigma=sigma,
+                    **options,
+                )
         except Exception as exc:  # a candidate's failure is reported; the search goes on
             return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
         return Candidate(effects, current.name, f, f.bic() - current.bic(), "")
