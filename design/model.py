@@ -16,13 +16,14 @@ friction. Effects (spec/formats.md names), each reducing to the baseline in its 
   tip), along ``environment.gravity_m_s2``.
 - ``hysteresis``: backlash/friction play in each transmission; acts on ordered command
   sequences (:func:`design.equilibrium.solve_sequence`) through :func:`play`.
-- ``printed_tip``: the tip as built (:mod:`design.mounting`): the flexible rod ends at the
-  proximal mounting piece's proximal face, a rigid segment carries the rings, the tracked
-  point (the proximal ring's centre, still at ``free_length`` from the base on the straight
-  robot) lies ``rigid_offset`` along it; with ``gravity``, each piece's weight acts at its
-  centre of mass; with ``torsion``, the pieces' rotational stops hold the rings' relative
-  angle and the pre-twist offsets the wire's command (:mod:`design.stops`). Its limit, pieces
-  of no size, is the bare rings of the other effects.
+- ``printed_tip`` (a switch beside the effects, :data:`PRINTED_TIP`): the tip as built
+  (:mod:`design.mounting`): the flexible rod ends at the proximal mounting piece's
+  proximal face, a rigid segment carries the rings, the tracked point (the proximal ring's
+  centre, still at ``free_length`` from the base on the straight robot) lies
+  ``rigid_offset`` along it; with ``gravity``, each piece's weight acts at its centre of
+  mass; with ``torsion``, the pieces' rotational stops hold the rings' relative angle and
+  the pre-twist offsets the wire's command (:mod:`design.stops`). Its limit, pieces of no
+  size, is the bare rings of the other effects.
 
 The baseline leaves the rigid segment out on purpose: it is the paper's model, whose rod is
 the catheter's whole free length with the rings at its end (eq. 6, L = 150 mm) and whose
@@ -60,8 +61,14 @@ from design.sections import polar_moment_of_area, second_moment_of_area, shear_m
 from design.stops import commanded_angles, resting_angles, stop_stiffness, stop_torque
 from design.wrench import tip_wrench
 
-EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis", "printed_tip")
-"""Model extensions by name (spec/formats.md; ``printed_tip`` is the project's)."""
+EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
+"""Model extensions by name (spec/formats.md): the causes a diagnosis can name."""
+PRINTED_TIP = "printed_tip"
+"""The tip as built (see the module's docstring): a switch of the model beside the effects,
+not among them, since it is known geometry of the design rather than a cause to find in
+data (diagnosis and the effects table leave it out)."""
+SWITCHES = (*EFFECTS, PRINTED_TIP)
+"""Everything a :class:`RingPairModel` can switch on."""
 
 
 DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity"})
@@ -79,23 +86,24 @@ def available_effects() -> tuple[str, ...]:
 
 
 def parse_effects(text: str) -> frozenset[str]:
-    """'none', 'default' (:data:`DEFAULT_EFFECTS`), 'all' or a comma list of effect names
-    (which may include 'default'); ValueError names the bad one."""
+    """'none', 'default' (:data:`DEFAULT_EFFECTS`), 'all' (every effect and the printed
+    tip, :data:`SWITCHES`) or a comma list of their names (which may include 'default');
+    ValueError names the bad one."""
     text = text.strip()
     if text in ("", "none", "baseline"):
         return frozenset()
     if text == "default":
         return DEFAULT_EFFECTS
     if text == "all":
-        return frozenset(available_effects())
+        return frozenset(SWITCHES)
     names = [t.strip() for t in text.split(",") if t.strip()]
     if "default" in names:  # 'default,torsion': the model for design work and more
         names = [n for n in names if n != "default"] + sorted(DEFAULT_EFFECTS)
-    bad = [n for n in names if n not in EFFECTS]
+    bad = [n for n in names if n not in SWITCHES]
     if bad:
         raise ValueError(
             f"unknown model effect {bad[0]!r}; expected 'none', 'default', 'all' or a comma "
-            f"list of {', '.join(EFFECTS)}"
+            f"list of {', '.join(SWITCHES)}"
         )
     return frozenset(names)
 
@@ -262,10 +270,10 @@ class RingPairModel:
     def __post_init__(self) -> None:
         effects = frozenset(self.effects)
         object.__setattr__(self, "effects", effects)
-        unknown = effects - set(EFFECTS)
+        unknown = effects - set(SWITCHES)
         if unknown:
             raise ValueError(
-                f"unknown model effect(s) {sorted(unknown)}; expected any of {list(EFFECTS)}"
+                f"unknown model effect(s) {sorted(unknown)}; expected any of {list(SWITCHES)}"
             )
         large = "large_deflection" in effects
         torsion = "torsion" in effects
@@ -281,7 +289,7 @@ class RingPairModel:
         s = Symbols(prm)
         load = s["load_scale"]
         length, ei = s["free_length"], s.bending_rigidity
-        printed = "printed_tip" in effects
+        printed = PRINTED_TIP in effects
         stops = printed and torsion
         # The flexible rod ends where the rigid tip segment starts, ``offset`` before the
         # tracked point (the proximal ring's centre); the baseline has no segment (see the

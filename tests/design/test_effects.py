@@ -34,7 +34,9 @@ def set_params(params: np.ndarray, **values: float) -> np.ndarray:
 
 def test_parse_effects():
     assert parse_effects("none") == frozenset()
-    assert parse_effects("all") == frozenset(available_effects()) == frozenset(EFFECTS)
+    assert parse_effects("all") == frozenset(available_effects()) | {"printed_tip"}
+    assert frozenset(available_effects()) == frozenset(EFFECTS)  # printed_tip: a switch
+    assert parse_effects("printed_tip,torsion") == {"printed_tip", "torsion"}
     assert parse_effects("default") == DEFAULT_EFFECTS < frozenset(EFFECTS)
     assert parse_effects("torsion, gravity") == {"torsion", "gravity"}
     assert parse_effects("default,torsion") == DEFAULT_EFFECTS | {"torsion"}
