@@ -216,6 +216,8 @@ def test_console_says_each_stage_duration_what_the_parts_are_for_and_the_result(
     for stage in ("optimisation", "Pareto sweeps", "tolerance Monte Carlo", "report"):
         assert re.search(rf"^{stage}.*: \d+\.\d s$", text, re.M), stage
     assert "CAD of the recommended design (best_design.toml), fdm print" in text
+    # the demonstrator's tip pieces are resin (tip.mounting.process): the console says so
+    assert "(the model assumes resin tip pieces: tip.mounting.process)" in text
     handoff = next(ln for ln in text.splitlines() if ln.startswith("hand-off: "))
     for name in ("best_design.toml", "pareto_external_distance.csv", "parts.csv"):
         assert name in handoff, name
@@ -237,7 +239,7 @@ def test_process_resin_builds_resin_parts(study_run, tmp_path):
     args = ["study", str(study_run[0]), "--out", str(copy), "--samples", "20", "--seed", "3"]
     result = CliRunner().invoke(cli, [*args, "--process", "resin", "--no-render"])
     assert result.exit_code == 0, result.output
-    assert "resin print" in result.stdout
+    assert "resin print: parts, checks" in result.stdout  # as modelled: no note
     rows, _ = _rows(copy / "cad" / "parts.csv")
     printed = [r for r in rows if r["printed"] == "True"]
     assert {r["material"] for r in printed} == {f"{RESIN.material}, resin print"}
