@@ -262,7 +262,6 @@ class _Kernels:
         passes the exact check; the rings stay clear of the external magnet. For the
         linear rod (the only one with leaps) both the fold monitor and the exact one are
         the Sylvester minors of the stiffness form, all positive where stable."""
-        n = model.n_unknowns
         probe = np.zeros(prm.size1())
         probe[index("free_length")] = 2.0
         length = prm[index("free_length")]
@@ -274,7 +273,7 @@ class _Kernels:
         def positive(v: ca.SX) -> ca.SX:
             return ca.mmin(v) > 0
 
-        x = ca.vertcat(ca.SX.zeros(model.n_rod), command)[:n]
+        x = model.initial.call([command, prm])[0]
         # The tangent at rest: (dr/dx)^-1 = K^-1 there, and r is linear in the load (but
         # for the rings' mutual torque, which goes with its square), so it is minus the
         # relaxation direction at full load.
@@ -676,12 +675,12 @@ def _fall(
 _RUN, _DONE, _FOLD, _FAIL = range(4)
 
 
-def _initial(model: RingPairModel, command: np.ndarray) -> np.ndarray:
-    """The unloaded robot for each column: straight, tip angles = command."""
-    x = np.zeros((model.n_unknowns, command.shape[1]))
-    if model.n_unknowns > model.n_rod:
-        x[model.n_rod :] = command
-    return x
+def _initial(model: RingPairModel, params: np.ndarray, command: np.ndarray) -> np.ndarray:
+    """The unloaded robot for each column (:attr:`RingPairModel.initial`: straight, the
+    tip angles the commands, or with stops the rings against them)."""
+    if model.n_unknowns == model.n_rod:
+        return np.zeros((model.n_unknowns, command.shape[1]))
+    return kernels(model).run(model.initial, [command], params)[0]
 
 
 def _near(predicted: np.ndarray) -> np.ndarray:
@@ -725,7 +724,7 @@ def _ramp(
     since the step before (a second-order predictor); from rest the tangent alone."""
     kern = kernels(model)
     n_cols = command.shape[1]
-    x = _initial(model, command)
+    x = _initial(model, params, command)
     scale = _scale(model, params, n_cols)
     lam = np.zeros(n_cols)
     lam_prev = np.full(n_cols, -1.0)
@@ -977,7 +976,7 @@ def _other_stable_states(
     the mirror image of the state and, with torsion, from the state with the rings' lags
     mirrored."""
     n_cols = command.shape[1]
-    starts = [_initial(model, command), _mirror(model, x)]
+    starts = [_initial(model, params, command), _mirror(model, x)]
     if model.n_unknowns > model.n_rod:
         lagged = x.copy()
         lagged[model.n_rod :] = 2 * command - x[model.n_rod :]

@@ -172,12 +172,6 @@ def test_stops_hold_the_relative_angle_on_random_setups(seed):
     assert (rho >= -give).all() and (rho <= stop + give).all(), f"seed {seed}: {rho}"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="design/equilibrium.py starts the load ramp from (0, command), not from the "
-    "model's own unloaded state (RingPairModel.initial: against the stops, pre-twisted); "
-    "the first ramp step then falls to the held state and flags it snapped",
-)
 def test_rings_held_from_rest_are_not_snapped():
     # Held at the stop from the unloaded robot on: no branch ends on the way (no snap).
     model = RingPairModel(STOPS)
