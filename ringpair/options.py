@@ -40,7 +40,7 @@ from rich.text import Text
 
 from design.atomic import remove_stale_temporaries
 from design.designfile import DesignError, default_design, load_design
-from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, parse_effects
+from design.model import DEFAULT_EFFECTS, SWITCHES, RingPairModel, parse_effects
 from design.records import Design
 from ringpair.angles import parse_angles
 
@@ -116,8 +116,9 @@ EFFECTS_HELP = (
     "Model effects on top of the paper's baseline: 'none', 'default' ("
     + ",".join(sorted(DEFAULT_EFFECTS))
     + "), 'all' or a comma list of "
-    + ", ".join(EFFECTS)
-    + " (see the README for what each adds and costs)."
+    + ", ".join(SWITCHES)
+    + " (printed_tip: the printed mounting pieces' rigid segment and weight; see the README "
+    "for what each adds and costs)."
 )
 
 
