@@ -257,3 +257,26 @@ def test_unknown_process_is_exit_2_and_writes_nothing(tmp_path, pareto_study):
     assert result.exit_code == 2
     assert "--process must be one of 'fdm', 'resin'; got 'sls'" in result.output
     assert len(result.output.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
+def test_on_a_terminal_each_stage_is_a_live_line_that_ends_in_its_duration(monkeypatch):
+    import io
+
+    from rich.console import Console
+
+    from ringpair.commands import study as command
+
+    screen, log = io.StringIO(), io.StringIO()
+    monkeypatch.setattr(command, "err_console", Console(file=screen, force_terminal=True))
+    monkeypatch.setattr(command, "console", Console(file=log, force_terminal=False))
+    with command._stages() as stages:
+        stages.start("Pareto sweeps on Dask")
+        stages.count(2, 5)
+        stages.end("Pareto sweeps on Dask", 12.34, reused=False)
+        stages.start("optimisation")
+        stages.end("optimisation", 3.0, reused=True)
+    assert "Pareto sweeps on Dask" in screen.getvalue()  # the live line, on stderr
+    assert log.getvalue().splitlines() == [
+        "Pareto sweeps on Dask: 12.3 s",
+        "optimisation: reused (it took 3.0 s)",
+    ]
