@@ -318,11 +318,11 @@ def run_study(
 
 
 def _tip_note(design: Design, process: str) -> str:
-    """Where the CAD prints the tip pieces otherwise than the model assumes, say so."""
-    modelled = design.tip.mounting.process
-    if modelled == process:
+    """Where the CAD prints the tip pieces otherwise than the design file says, say so."""
+    designed = design.tip.mounting.process
+    if designed == process:
         return ""
-    return f" (the model assumes {modelled} tip pieces: tip.mounting.process)"
+    return f" (the design's tip pieces are {designed}: tip.mounting.process)"
 
 
 def write_pareto_csvs(pareto: ParetoResult, study: Study, folder: Path) -> list[Path]:

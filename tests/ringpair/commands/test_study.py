@@ -217,7 +217,7 @@ def test_console_says_each_stage_duration_what_the_parts_are_for_and_the_result(
         assert re.search(rf"^{stage}.*: \d+\.\d s$", text, re.M), stage
     assert "CAD of the recommended design (best_design.toml), fdm print" in text
     # the demonstrator's tip pieces are resin (tip.mounting.process): the console says so
-    assert "(the model assumes resin tip pieces: tip.mounting.process)" in text
+    assert "(the design's tip pieces are resin: tip.mounting.process)" in text
     handoff = next(ln for ln in text.splitlines() if ln.startswith("hand-off: "))
     for name in ("best_design.toml", "pareto_external_distance.csv", "parts.csv"):
         assert name in handoff, name
