@@ -17,6 +17,7 @@ given only the nominal design file and the data. Prints, per planted set and ove
 - time: median seconds per diagnosis (goal <= 30 s).
 
     python benchmarks/diagnose.py --random 2 [--seed 0] [--only torsion,null] [--jsonl out.jsonl]
+    python benchmarks/diagnose.py --summary out.jsonl   # the figures of earlier rows
 
 The baseline it is judged against is the calibrated paper model the diagnosis starts
 from (``baseline`` of each result).
@@ -92,7 +93,6 @@ def summary(rows: list[dict], label: str) -> str:
     rec = [z for r in ok for z in r["recovery"]]
     times = [r["seconds"] for r in ok]
     parts = [
-        f"{label:<28s}",
         f"right {right}/{len(det)}"
         + (f" ({len(ok) - len(det)} undetectable)" * (len(ok) > len(det))),
     ]
@@ -108,7 +108,7 @@ def summary(rows: list[dict], label: str) -> str:
         parts.append(f"time median {np.median(times):.0f} s")
     if len(ok) < len(rows):
         parts.append(f"FAILED {len(rows) - len(ok)}")
-    return ", ".join(parts)
+    return f"{label:<28s}" + ", ".join(parts)
 
 
 def main() -> None:
@@ -117,7 +117,17 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--only", default="", help="comma-separated planted sets (e.g. torsion,null)")
     ap.add_argument("--jsonl", type=Path, help="append one JSON row per diagnosis here")
+    ap.add_argument(
+        "--summary", type=Path, help="only print the figures of the rows of this --jsonl file"
+    )
     args = ap.parse_args()
+    if args.summary:
+        rows_of: dict[str, list[dict]] = {}
+        for line in args.summary.read_text().splitlines():
+            row = json.loads(line)
+            rows_of.setdefault(row["planted"], []).append(row)
+        report(rows_of, f"{args.summary}")
+        return
     sets = [
         s
         for s in PLANTED_SETS
@@ -160,7 +170,12 @@ def main() -> None:
                     with args.jsonl.open("a") as f:
                         f.write(json.dumps(row, default=float) + "\n")
                 bar.advance(task)
-    print(f"\n--random {args.random} --seed {args.seed}:")
+    report(rows, f"--random {args.random} --seed {args.seed}")
+
+
+def report(rows: dict[str, list[dict]], title: str) -> None:
+    """The figures per planted set and overall."""
+    print(f"\n{title}:")
     for label, group in rows.items():
         print(summary(group, label))
     print(summary([r for g in rows.values() for r in g], "all"))
