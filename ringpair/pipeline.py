@@ -36,7 +36,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -50,10 +50,7 @@ from design.registry import PARAMETERS, index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import Study
-from ringpair.tables import effect_shifts, pareto_header, pareto_rows, write_rows
-
-if TYPE_CHECKING:
-    from optimize.sizing.pareto import ParetoResult
+from ringpair.tables import effect_shifts, write_pareto_csvs
 
 TOLERANCES = {n: p.tolerance for n, p in PARAMETERS.items() if p.tolerance is not None}
 """Manufacturing and placement tolerances of the Monte Carlo (one sigma), parameter ->
@@ -325,17 +322,6 @@ def _tip_note(design: Design, process: str) -> str:
     return f" (the design's tip pieces are {designed}: tip.mounting.process)"
 
 
-def write_pareto_csvs(pareto: ParetoResult, study: Study, folder: Path) -> list[Path]:
-    """``pareto_<quantity>.csv`` in ``folder`` for each sweep of a ParetoResult (file
-    units, # lines saying what each column means); the paths."""
-    paths = []
-    for against, points in pareto.sweeps.items():
-        path = folder / f"pareto_{against}.csv"
-        write_rows(path, pareto_rows(points, study), pareto_header(against, study))
-        paths.append(path)
-    return paths
-
-
 def headline(run: Run) -> str:
     """The result in one paragraph: the recommended design's disc radius under the model
     for design work against the start's, and where its design file and parts are."""
@@ -425,5 +411,4 @@ __all__ = [
     "headline",
     "run_study",
     "write_manifest",
-    "write_pareto_csvs",
 ]

@@ -8,6 +8,7 @@ import io
 import os
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,7 +21,7 @@ from design.records import Design
 from design.units import MM, MM3
 
 if TYPE_CHECKING:
-    from optimize.sizing.pareto import ParetoPoint
+    from optimize.sizing.pareto import ParetoPoint, ParetoResult
     from optimize.sizing.studyfile import Study
 
 POSE_COLUMNS = (
@@ -208,6 +209,17 @@ def pareto_header(against: str, study: Study) -> str:
         "error: why a point failed; the other columns: the free quantities, in the study "
         "file's units (as the key names say)."
     )
+
+
+def write_pareto_csvs(pareto: ParetoResult, study: Study, folder: Path) -> list[Path]:
+    """``pareto_<quantity>.csv`` in ``folder`` for each sweep of a ParetoResult (file
+    units, # lines saying what each column means); the paths."""
+    paths = []
+    for against, points in pareto.sweeps.items():
+        path = folder / f"pareto_{against}.csv"
+        write_rows(path, pareto_rows(points, study), pareto_header(against, study))
+        paths.append(path)
+    return paths
 
 
 def write_rows(

@@ -28,7 +28,7 @@ from ringpair.options import (
     progress,
     study_from,
 )
-from ringpair.tables import pareto_rows, write_rows
+from ringpair.tables import write_pareto_csvs
 
 if TYPE_CHECKING:
     from optimize.sizing.nlp import OptimizationResult
@@ -93,10 +93,7 @@ def optimize(
     pareto = None
     if study.pareto and not no_pareto:
         pareto = _run_sweeps(study, out, scheduler, workers)
-        for against, points in pareto.sweeps.items():
-            path = out / f"pareto_{against}.csv"
-            write_rows(path, pareto_rows(points, study))
-            written.append(path)
+        written += write_pareto_csvs(pareto, study, out)
         plot_fronts(pareto, best, study, out / "pareto.png")
         written.append(out / "pareto.png")
         console.print(

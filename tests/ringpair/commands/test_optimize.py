@@ -29,7 +29,9 @@ def test_optimize_writes_the_best_design_fronts_plots_and_summary(tmp_path, pare
     assert radius == pytest.approx(summary["forward"]["best_disc_radius_mm"], rel=1e-9)
     assert abs(radius - summary["objective"] * 1e3) < 1e-2 * radius
     assert radius > summary["forward"]["start_disc_radius_mm"]
-    rows = list(csv.DictReader((out / "pareto_external_distance.csv").read_text().splitlines()))
+    lines = (out / "pareto_external_distance.csv").read_text().splitlines()
+    assert lines[0].startswith("# Pareto sweep")  # what the columns mean, in # lines
+    rows = list(csv.DictReader(ln for ln in lines if not ln.startswith("#")))
     assert len(rows) == 3 and all(r["feasible"] == "True" for r in rows)
     assert float(rows[-1]["external_distance_mm"]) == pytest.approx(float(rows[-1]["epsilon"]))
     objective = [float(r["objective"]) for r in rows]
