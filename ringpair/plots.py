@@ -152,10 +152,10 @@ def plot_controllable(ws: Workspace, ctl: Controllable, path: Path, model: str) 
     fig, ax = plt.subplots(figsize=(6.4, 6))
     tip = (ctl.position - ws.rest_position)[:, :, 1:] / MM
     ok = np.isfinite(tip).all(axis=2)
-    ax.scatter(*tip[ok & ctl.controllable].T, s=4, color=REACH, label="steerable from rest")
-    behind = ok & ~ctl.controllable
-    if behind.any():
-        ax.scatter(*tip[behind].T, s=6, color=LOOP, label="only through a snap")
+    steerable, behind = tip[ok & ctl.controllable], tip[ok & ~ctl.controllable]
+    ax.scatter(steerable[:, 0], steerable[:, 1], s=4, color=REACH, label="steerable from rest")
+    if len(behind):
+        ax.scatter(behind[:, 0], behind[:, 1], s=6, color=LOOP, label="only through a snap")
     for radius, style, label in (
         (ws.disc_radius, ":", "largest disc"),
         (ctl.disc_radius, "--", "controllable disc"),
