@@ -13,7 +13,8 @@ model), so every one is reachable. Solved two ways:
 
 It prints the time per target of each, their ratio (goal >= 50x), how many targets
 ringpair reaches (to 1e-6 mm), and whether the answers agree: every solution least
-squares converges to (to 1e-6 mm) is among ringpair's solutions for that target. Least
+squares converges to (to 1e-6 mm) is among ringpair's solutions for that target (angles
+within SAME_SOLUTION). Least
 squares runs on a subsample (``--n-scipy``) as it takes about 30 ms per target.
 
     python benchmarks/steer.py [--n 10000] [--n-scipy 300] [--seed 0]
@@ -32,6 +33,12 @@ from design.equilibrium import solve_equilibria
 from design.model import model_for
 from design.steering import REACHED, SEED_STEP, steer
 from design.workspace import angle_grid
+
+SAME_SOLUTION = 1e-3
+"""Two solutions of one target are the same when their angles agree to this [rad]: both
+put the tip within REACHED (1e-9 m) of the target, which pins the angles to about 1e-7
+rad where the map is regular but only to about sqrt(1e-9 m / 20 mm) = 2e-4 rad at the
+workspace's rim, where it folds (the rings parallel)."""
 
 
 def main() -> None:
@@ -83,7 +90,7 @@ def main() -> None:
             converged += 1
             mine = result.theta[(result.target_index == k) & result.reached]
             wrapped = np.abs(np.angle(np.exp(1j * (mine - x)))).max(axis=1)
-            agree += bool(len(mine) and wrapped.min() < 1e-5)
+            agree += bool(len(mine) and wrapped.min() < SAME_SOLUTION)
 
     print(f"demonstrator, baseline model, {len(targets):,} reachable targets")
     print(
