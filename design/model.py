@@ -73,7 +73,7 @@ SWITCHES = (*EFFECTS, PRINTED_TIP)
 
 DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity"})
 """The model for design work: the most faithful that is well posed from a design file alone
-and stays fast (about 2,100 configurations per second on two cores). ``torsion`` is left out:
+and stays fast (about 11,000 configurations per second on two cores). ``torsion`` is left out:
 with touching rings (kappa > 1) it makes the robot multistable, so the state depends on the
 path driven and on mechanical stops, not on the commanded angles alone; ``hysteresis`` needs
 friction angles, which come from bench data; ``printed_tip`` waits for the state tests'
