@@ -1,4 +1,4 @@
-"""Design files (TOML, spec/formats.md): load, validate, save.
+"""Design files (TOML, docs/formats.md): load, validate, save.
 
 Files speak millimetres, megapascals, tesla and kg/m^3 as their key names say; the
 returned :class:`~design.records.Design` is in SI. Every bad value raises

@@ -30,7 +30,7 @@ running clearance ``c`` and the fit allowance of the process (:data:`PROCESSES`)
 The rigid tip segment runs from the proximal piece's proximal face (where the catheter
 enters its socket: the flexible rod ends there) to the distal piece's far face. The
 proximal ring's centre, the robot's tracked point (``robot.free_length`` ends there, as
-``spec/formats.md`` says), lies :attr:`TipGeometry.rigid_offset` along it.
+``docs/formats.md`` says), lies :attr:`TipGeometry.rigid_offset` along it.
 
 Rotational stops (the paper's "relative rotational limits"): the key (angular width
 :data:`KEY_ANGLE`) rides in the notch, which spans the stop angle plus the key, so the

@@ -142,7 +142,7 @@ class Environment:
 
 @dataclass(frozen=True)
 class Design:
-    """One robot and its set-up, as in a design file (spec/formats.md)."""
+    """One robot and its set-up, as in a design file (docs/formats.md)."""
 
     name: str
     robot: Robot

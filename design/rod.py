@@ -10,7 +10,7 @@ q per length that is constant in the base frame (self-weight, default zero):
     n' = -q,
     m' = -p' x n.
 There is no twist (u_x = 0): the frame is carried by bending alone, as the tip frame of
-:mod:`design.cantilever` and spec/formats.md. The axial part of m (held by the torsionally
+:mod:`design.cantilever` and docs/formats.md. The axial part of m (held by the torsionally
 stiff transmissions) bends nothing where it is applied; carried along a curved rod it
 does, through m' = -t x n and the change of t. In the base frame the frame turns at the
 Darboux vector omega = R u = (m - (t . m) t) / EI, i.e. R' = [omega]^ R and t' = omega x t.

@@ -1,6 +1,6 @@
 """Force and torque of the external field on the two tip rings (paper eqs. 1-2).
 
-Geometry (spec/formats.md): the proximal ring (angle theta2, turned by the catheter) is
+Geometry (docs/formats.md): the proximal ring (angle theta2, turned by the catheter) is
 centred on the rod tip p; the distal ring (theta1, turned by the wire) one centre spacing
 delta further along the tip tangent n. Each ring's moment lies in the tip cross-section:
 m_i = |m| (cos theta_i y_tip + sin theta_i z_tip).
