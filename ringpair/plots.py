@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from optimize.fitting.diagnose import Diagnosis
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.nlp import OptimizationResult
-    from optimize.sizing.pareto import ParetoResult
+    from optimize.sizing.pareto import ParetoPoint, ParetoResult
     from optimize.sizing.studyfile import Study
 
 REACH = "#1f77b4"
@@ -325,7 +325,8 @@ def plot_branch_diagram(
 
 
 def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, path: Path) -> None:
-    """Objective against each swept bound, with the unconstrained optimum marked."""
+    """Objective against each swept bound, with the unconstrained optimum marked; points
+    where the swept bound holds the design (:func:`binding`) filled, the others hollow."""
     sweeps = [(a, pts) for a, pts in pareto.sweeps.items() if pts]
     fig, axes = plt.subplots(1, len(sweeps), figsize=(5 * len(sweeps), 3.8), squeeze=False)
     best_objective = objective_in_report_units(study, best.objective)
@@ -333,7 +334,10 @@ def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, pa
         unit, label = PARETO_UNITS[against]
         eps = np.array([p.epsilon for p in pts]) / unit
         obj = np.array([objective_in_report_units(study, p.objective) for p in pts])
-        ax.plot(eps, obj, "o-", color="tab:blue", label="Pareto front")
+        binds = np.array([binding(p, best.objective) for p in pts], dtype=bool)
+        ax.plot(eps, obj, "-", color="tab:blue", lw=1)
+        ax.plot(eps[binds], obj[binds], "o", color="tab:blue", label="bound binds")
+        ax.plot(eps[~binds], obj[~binds], "o", mfc="white", color="tab:blue", label="bound slack")
         if best.feasible:
             ax.plot(best.metrics[against] / unit, best_objective, "r*", ms=14, label="best design")
         ax.set_xlabel(label)
@@ -346,23 +350,66 @@ def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, pa
     _save(fig, path, dpi=120)
 
 
-def plot_workspaces(start: Workspace, best: Workspace, path: Path) -> None:
-    """Starting vs optimised reachable sets seen along x, around each rest position. [mm]"""
+def binding(point: ParetoPoint, optimum: float) -> bool:
+    """Whether a Pareto point's swept bound holds its design: an active group of its NLP
+    that costs objective, the point's objective more than 0.1 % below ``optimum`` (the
+    unbounded study's, in the same units)."""
+    r = point.result
+    active = r is not None and r.feasible and f"epsilon.{point.against}" in r.active
+    return bool(active and point.objective < optimum - 1e-3 * abs(optimum))
+
+
+def plot_workspaces(start: Workspace, best: Workspace, path: Path, model: str = "") -> None:
+    """Starting vs optimised reachable sets seen along x, around each rest position, each
+    with its parallel-ring loop and its largest disc; ``model`` names the model in the
+    title. [mm]"""
     fig, ax = plt.subplots(figsize=(6.5, 6))
-    for ws, colour, name in ((start, "tab:gray", "starting design"), (best, "tab:blue", "optimum")):
+    for ws, colour, name in ((start, "tab:gray", "start"), (best, "tab:blue", "optimum")):
         pts = (ws.reachable - ws.rest_position) / MM
         ax.scatter(pts[:, 1], pts[:, 2], s=2, color=colour, alpha=0.4)
         loop = (ws.parallel.position - ws.rest_position) / MM
-        ax.plot(loop[:, 1], loop[:, 2], "-", color=colour, lw=1.5, label=name)
-        circle = plt.Circle((0, 0), ws.disc_radius / MM, fill=False, ls="--", color=colour)
+        ax.plot(loop[:, 1], loop[:, 2], "-", color=colour, lw=1.5, label=f"{name}: boundary")
+        r = ws.disc_radius / MM
+        circle = Circle(
+            (0, 0), r, fill=False, ls="--", color=colour, label=f"{name}: disc r = {r:.2f} mm"
+        )
         ax.add_patch(circle)
     ax.set_aspect("equal")
     ax.set_xlabel("y - y_rest [mm]")
     ax.set_ylabel("z - z_rest [mm]")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Workspace seen along x: parallel-ring loop and largest disc")
-    _save(fig, path, dpi=120)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("Workspace seen along x" + (f"\n{model} model" if model else ""), fontsize=10)
+    _save(fig, path, dpi=110)
+
+
+def plot_tip_views(start: Workspace, best: Workspace, path: Path, model: str) -> None:
+    """Top (x-y) and side (x-z) views of the reachable tips of the start and the optimum,
+    zoomed on the tips (axes not to scale: the cloud is far narrower in x); the rest tip
+    marked; ``model`` named in the title. Base frame [mm]."""
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    clouds = [(start, "tab:gray", "start"), (best, "tab:blue", "optimum")]
+    every = np.vstack([ws.reachable for ws, _, _ in clouds]) / MM
+    for ax, j, view in ((axes[0], 1, "top view (x-y)"), (axes[1], 2, "side view (x-z)")):
+        for ws, colour, name in clouds:
+            pts = ws.reachable / MM
+            ax.scatter(pts[:, 0], pts[:, j], s=3, color=colour, alpha=0.5, label=f"{name}: tips")
+        rest = best.rest_position / MM
+        ax.plot(rest[0], rest[j], "k+", ms=12, label="rest tip")
+        lo, hi = every.min(axis=0), every.max(axis=0)
+        pad = 0.08 * (hi - lo) + 0.5
+        ax.set_xlim(lo[0] - pad[0], hi[0] + pad[0])
+        ax.set_ylim(lo[j] - pad[j], hi[j] + pad[j])
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel(f"{'xyz'[j]} [mm]")
+        ax.set_title(view, fontsize=10)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, loc="best", markerscale=3)
+    fig.suptitle(
+        f"Reachable tips, {model} model (zoomed on the tips; axes not to scale)", fontsize=10
+    )
+    fig.tight_layout()
+    _save(fig, path, dpi=110)
 
 
 def plot_tolerance(radii_mm: np.ndarray, nominal_mm: float, path: Path) -> None:

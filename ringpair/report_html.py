@@ -1,10 +1,21 @@
 """The study report: one self-contained HTML page (images embedded) and ``results.json``
-with every number the page shows. Millimetres, degrees and mm^3 on the page."""
+with every number the page shows. Millimetres, degrees and mm^3 on the page.
+
+The first screen answers the study: the question (objective, set-up, what was free within
+which bounds, the limits, the model), the answer (the recommended design, its disc radius
+under the study's model and re-simulated with the model for design work, the gain over the
+start), what limits it (the active constraints and bounds, in words, with their multipliers)
+and the next decision (the limit whose move gains most, from the pipeline's sensitivity
+stage). The sections below it hold the full design table, the results per material, the
+constraints, the figures (each naming its model), the Pareto fronts with a sentence each,
+the tolerance spread, the parts list with masses and renders, and the CAD checks (only the
+failed or tight ones expanded)."""
 
 from __future__ import annotations
 
 import html
 import json
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -13,22 +24,219 @@ from typing import Any
 import numpy as np
 
 from design.atomic import atomic_path, write_text
-from design.designfile import design_to_dict
-from design.model import DEFAULT_EFFECTS
-from design.units import MM, MM3
-from ringpair.html_page import img, table
-from ringpair.pipeline import TOLERANCES, Run
-from ringpair.plots import plot_fronts, plot_projection, plot_tolerance, plot_workspaces
+from design.model import DEFAULT_EFFECTS, RingPairModel
+from design.registry import PARAMETERS, file_unit
+from design.units import DEG, MM, MM3
+from ringpair.html_page import details, img, table, thumb
+from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run
+from ringpair.plots import (
+    binding,
+    plot_fronts,
+    plot_tip_views,
+    plot_tolerance,
+    plot_workspaces,
+)
+from ringpair.tables import PARETO_UNITS, objective_in_report_units
+
+OBJECTIVE_WORDS = {
+    "disc_radius": "the largest disc of reachable tip positions around the rest tip (disc radius)",
+    "area": "the area of the reachable set seen along x",
+    "reach_ratio": "the roundness of the reachable set (smaller over larger reach)",
+}
+"""What each objective of a study makes as large as possible, in words."""
+
+LIMIT_WORDS = {
+    "max_outer_diameter": ("tip and catheter outer diameter at most", MM, "mm"),
+    "wire_clearance": ("bores at least the wire plus", MM, "mm"),
+    "min_wall": ("ring and catheter walls at least", MM, "mm"),
+    "magnet_clearance": ("rings at least this far from the external magnet:", MM, "mm"),
+    "twist_limit": ("twist of each transmission at most", DEG, "deg"),
+    "neutral_tolerance": ("tip deflection with antiparallel rings at most", MM, "mm"),
+    "catheter_max_strain": ("catheter bending strain at most", 1e-2, "%"),
+    "wire_max_strain": ("wire bending strain at most", 1e-2, "%"),
+    "min_disc_radius": ("disc radius at least", MM, "mm"),
+    "min_reach_ratio": ("reach ratio at least", 1.0, ""),
+}
+"""A study's limits (:class:`optimize.sizing.studyfile.Constraints` fields) in words, with
+the unit the report gives them in (SI per unit, label)."""
+
+TIGHT = 0.1
+"""A passing CAD check whose value is within this fraction of its limit is shown expanded
+with the failures (the others are collapsed)."""
 
 
-def _flat(d: dict[str, Any], prefix: str = "") -> dict[str, float]:
-    out: dict[str, float] = {}
-    for k, v in d.items():
-        if isinstance(v, dict):
-            out |= _flat(v, f"{prefix}{k}.")
-        elif isinstance(v, int | float) and not isinstance(v, bool):
-            out[f"{prefix}{k}"] = float(v)
-    return out
+def _mm(x: float) -> str:
+    return f"{x / MM:.3g}"
+
+
+def model_names(run: Run) -> tuple[str, str]:
+    """The study's model and the model for design work, by name ('baseline' or the
+    effects joined by '+')."""
+    return RingPairModel(run.study.effects).name, RingPairModel(DEFAULT_EFFECTS).name
+
+
+def design_rows(run: Run) -> list[dict[str, Any]]:
+    """Every dimension of the design, start and optimum, with the study's bounds for the
+    free ones (file units): quantity, key, unit, start, optimum, low, high (None: fixed),
+    changed. The external magnet's distance is the rest tip to the magnet's centre."""
+    best, study = run.results["optimise"], run.study
+    rows = []
+    for name, p in PARAMETERS.items():
+        if p.field is None or p.key is None:
+            continue
+        unit, scale = file_unit(name)
+        start, end = p.value(study.base) / scale, p.value(best.design) / scale
+        b = study.bound(name)
+        rows.append(
+            {
+                "quantity": p.meaning,
+                "key": p.key + (f"[{p.field[-2]}]" if p.field.endswith("]") else ""),
+                "unit": unit,
+                "start": start,
+                "optimum": end,
+                "low": b.low / scale if b else None,
+                "high": b.high / scale if b else None,
+                "changed": not np.isclose(start, end, rtol=1e-9, atol=1e-12),
+            }
+        )
+    b = study.bound("external_distance")
+    start_d, end_d = best.base_metrics["external_distance"], best.metrics["external_distance"]
+    rows.append(
+        {
+            "quantity": "external magnet distance, rest tip to the magnet's centre",
+            "key": "external_distance_mm (study file)",
+            "unit": "mm",
+            "start": start_d / MM,
+            "optimum": end_d / MM,
+            "low": b.low / MM if b else None,
+            "high": b.high / MM if b else None,
+            "changed": not np.isclose(start_d, end_d, rtol=1e-9),
+        }
+    )
+    return rows
+
+
+def material_rows(run: Run) -> list[dict[str, Any]]:
+    """Per material combination: the best accepted objective over its starts (report
+    units; NaN when no start was accepted), starts accepted and tried."""
+    best, study = run.results["optimise"], run.study
+    out: dict[tuple, dict[str, Any]] = {}
+    for s in best.starts:
+        row = out.setdefault(
+            s.materials,
+            {
+                "catheter": s.materials[0] or "as in the base design",
+                "wire": s.materials[1] or "as in the base design",
+                "objective": np.nan,
+                "accepted": 0,
+                "starts": 0,
+            },
+        )
+        row["starts"] += 1
+        if s.accepted:
+            row["accepted"] += 1
+            value = objective_in_report_units(study, s.objective)
+            row["objective"] = np.nanmax([row["objective"], value])
+    return list(out.values())
+
+
+def front_notes(run: Run) -> dict[str, str]:
+    """One sentence per Pareto sweep: what the front means and where its bound binds."""
+    from optimize.sizing.studyfile import PARETO_QUANTITIES
+
+    best, study = run.results["optimise"], run.study
+    opt = objective_in_report_units(study, best.objective)
+    notes = {}
+    for against, pts in run.results.get("pareto", _NoSweeps).sweeps.items():
+        if not pts:
+            continue
+        unit, label = PARETO_UNITS[against]
+        name, u = re.match(r"(.*) \[(.*)\]", label).groups()  # type: ignore[union-attr]
+        sense = "at most" if PARETO_QUANTITIES[against][2] == "max" else "at least"
+        eps = np.array([p.epsilon for p in pts]) / unit
+        obj = np.array([objective_in_report_units(study, p.objective) for p in pts])
+        binds = np.array([binding(p, best.objective) for p in pts], dtype=bool)
+        mine = best.metrics[against] / unit
+        text = (
+            f"The best disc radius when the {name} must be {sense} a bound, swept from "
+            f"{eps.min():.3g} to {eps.max():.3g} {u} (the optimum has {mine:.3g} {u}). "
+        )
+        if not binds.any():
+            text += (
+                f"Flat at {np.nanmax(obj):.2f} mm: the bound does not bind in this range, "
+                f"every bound swept already admits the optimum's {mine:.3g} {u}"
+                + (", which sits at its own bound in the study" if _at_bound(best, against) else "")
+                + "."
+            )
+        else:
+            e, o = eps[binds], obj[binds]
+            worst = int(np.nanargmin(o))
+            slope = (opt - o[worst]) / max(abs(mine - e[worst]), 1e-12)
+            text += (
+                f"It binds from {e.min():.3g} to {e.max():.3g} {u}: at {e[worst]:.3g} {u} the "
+                f"disc radius is {o[worst]:.2f} mm, {opt - o[worst]:.2f} mm below the "
+                f"optimum's, about {slope:.2g} mm of disc radius per {u} beyond the optimum's "
+                f"{mine:.3g} {u}."
+            )
+        failed = int(np.count_nonzero(~np.array([p.feasible for p in pts])))
+        if failed:
+            text += f" {failed} of {len(pts)} points found no design."
+        notes[against] = text
+    return notes
+
+
+class _NoSweeps:
+    sweeps: dict = {}
+
+
+def _at_bound(best: Any, against: str) -> bool:
+    return any(a.startswith(f"bound.{against}.") for a in best.active)
+
+
+def limit_rows(run: Run) -> list[dict[str, Any]]:
+    """The sensitivity stage's rows (see :func:`ringpair.pipeline.sensitivity`), and the
+    active items it could not move, without a gain."""
+    best = run.results["optimise"]
+    rows = list(run.results.get("sensitivity", []))
+    covered = {g for r in rows for g in r["groups"]}
+    for item in best.active:
+        if item not in covered and not item.startswith("epsilon."):
+            rows.append(
+                {
+                    "meaning": item,
+                    "limit": item,
+                    "groups": [item],
+                    "unit": "",
+                    "old": np.nan,
+                    "new": np.nan,
+                    "multiplier": np.nan,
+                    "objective": np.nan,
+                    "gain": np.nan,
+                }
+            )
+    return rows
+
+
+def _number(x: Any, fmt: str = ".3g") -> str:
+    return "" if x is None or not np.isfinite(x) else format(x, fmt)
+
+
+def check_rows(checks: list[dict[str, Any]]) -> tuple[list[dict], list[dict]]:
+    """The CAD checks split in those to show (failed, or passing within TIGHT of a
+    numeric limit ``>= x``/``<= x``) and the rest."""
+    shown: list[dict[str, Any]] = []
+    rest: list[dict[str, Any]] = []
+    for c in checks:
+        m = re.match(r"\s*(>=|<=|>|<)\s*(-?[0-9.eE+-]+)", str(c.get("limit", "")))
+        tight = False
+        if m and isinstance(c.get("value"), int | float | np.floating):
+            limit = float(m.group(2))
+            margin = (
+                float(c["value"]) - limit if m.group(1)[0] == ">" else limit - float(c["value"])
+            )
+            tight = margin < TIGHT * max(abs(limit), 1e-9)
+        (shown if tight or not c.get("passed", True) else rest).append(c)
+    return shown, rest
 
 
 def results(run: Run) -> dict[str, Any]:
@@ -37,6 +245,7 @@ def results(run: Run) -> dict[str, Any]:
     fwd = run.results["forward"]
     tol = run.results["tolerance"]["disc_radius"] / MM
     start_ws, best_ws = fwd["start"], fwd["best"]
+    study_model, work_model = model_names(run)
 
     def metrics(m: dict[str, float]) -> dict[str, float]:
         return {
@@ -44,22 +253,36 @@ def results(run: Run) -> dict[str, Any]:
             "reach_ratio": m["reach_ratio"],
             "neutral_deflection_mm": m["neutral_deflection"] / MM,
             "magnet_volume_mm3": m["magnet_volume"] / MM3,
-            "external_distance_mm": m["external_distance"] / MM,
+            "external_distance_to_centre_mm": m["external_distance"] / MM,
         }
 
+    from optimize.sizing.nlp_problem import GROUPS
+
     constraints = {
-        c.name: {"value": c.value / c.scale, "limit": c.limit / c.scale, "unit": c.unit}
+        c.name: {
+            "meaning": GROUPS[c.name][2] if c.name in GROUPS else "",
+            "value": c.value / c.scale,
+            "limit": c.limit / c.scale,
+            "unit": c.unit,
+            "active": c.active,
+            "multiplier": c.multiplier,
+        }
         for c in best.constraints
     }
     doc: dict[str, Any] = {
         "study": run.study.name,
-        "model": sorted(run.study.effects) or ["baseline"],
+        "model": study_model,
         "start": metrics(best.base_metrics),
         "best": metrics(best.metrics),
         "materials": list(best.materials),
+        "per_material": material_rows(run),
+        "design": design_rows(run),
         "constraints": constraints,
+        "active": list(best.active),
+        "limits": limit_rows(run),
+        "pareto": front_notes(run),
         "forward": {
-            "model": sorted(DEFAULT_EFFECTS),
+            "model": work_model,
             "start_disc_radius_mm": start_ws.disc_radius / MM,
             "best_disc_radius_mm": best_ws.disc_radius / MM,
         },
@@ -82,6 +305,248 @@ def results(run: Run) -> dict[str, Any]:
     return doc
 
 
+def _question(run: Run, doc: dict[str, Any]) -> str:
+    """The study's question in a paragraph: objective, set-up, free bounds, limits, model."""
+    study, base = run.study, run.study.base
+    ext = base.external_magnet
+    words = " and ".join(OBJECTIVE_WORDS.get(n, n) for n, _ in study.objective)
+    free = [
+        f"{r['quantity']} {r['low']:.3g}–{r['high']:.3g} {r['unit']}"
+        for r in doc["design"]
+        if r["low"] is not None
+    ]
+    mats = [
+        f"{what} {' or '.join(names)}"
+        for what, names in (("catheter", study.catheter_materials), ("wire", study.wire_materials))
+        if names
+    ]
+    limits = []
+    for name, (text, scale, unit) in LIMIT_WORDS.items():
+        value = getattr(study.limits, name)
+        if value is not None:
+            limits.append(f"{text} {value / scale:.3g} {unit}".strip())
+    if study.limits.stable:
+        limits.append("every sampled pose stable")
+    start_d = doc["start"]["external_distance_to_centre_mm"]
+    return (
+        f"<p class=question><b>Question.</b> Which design makes {html.escape(words)} as "
+        f"large as possible, for a robot of free length {_mm(base.robot.free_length)} mm "
+        f"steered by a {ext.shape} magnet Ø{_mm(ext.diameter)} × {_mm(ext.length)} mm "
+        f"({ext.remanence:.3g} T), its centre {start_d:.2f} mm from the rest tip in the start "
+        f"design? Model of the study: <b>{html.escape(doc['model'])}</b>.</p>"
+        f"<ul class=setup><li><b>Free</b> (bounds): {html.escape('; '.join(free + mats))}</li>"
+        f"<li><b>Limits</b>: {html.escape('; '.join(limits))}</li></ul>"
+    )
+
+
+def _answer(run: Run, doc: dict[str, Any]) -> str:
+    """The answer cards: disc radius under the study's model (the headline) and under the
+    model for design work, each against the start; the recommended design in one line."""
+    s, b = doc["start"]["disc_radius_mm"], doc["best"]["disc_radius_mm"]
+    f = doc["forward"]
+    cards = [
+        f'<div class="card main"><div class=big id=headline>{b:.2f} mm</div>'
+        f"disc radius of the recommended design, {html.escape(doc['model'])} model (the "
+        f"study's)<br>start {s:.2f} mm: <b>{b - s:+.2f} mm ({100 * (b / s - 1):+.0f} %)</b></div>"
+    ]
+    if f["model"] != doc["model"]:
+        fs, fb = f["start_disc_radius_mm"], f["best_disc_radius_mm"]
+        cards.append(
+            f"<div class=card><div class=big id=forward>{fb:.2f} mm</div>re-simulated with "
+            f"the model for design work ({html.escape(f['model'])})<br>start {fs:.2f} mm: "
+            f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b></div>"
+        )
+    d = run.results["optimise"].design
+    cat, wire = doc["materials"]
+    dims = (
+        f"catheter{' ' + cat if cat else ''} Ø{_mm(d.robot.catheter.outer_diameter)}/"
+        f"{_mm(d.robot.catheter.inner_diameter)} mm, wire{' ' + wire if wire else ''} "
+        f"Ø{_mm(d.robot.wire.outer_diameter)} mm, rings Ø{_mm(d.tip.magnet_outer_diameter)}/"
+        f"{_mm(d.tip.magnet_inner_diameter)} × {_mm(d.tip.magnet_length)} mm with "
+        f"{_mm(d.tip.gap)} mm gap, magnet centre "
+        f"{doc['best']['external_distance_to_centre_mm']:.1f} mm from the rest tip"
+    )
+    cards.append(
+        f"<div class=card><b>Recommended design</b>: {html.escape(dims)}. "
+        f"Design file <code>{BEST_DESIGN}</code>; parts in <code>cad/</code> "
+        f"(<code>parts.csv</code>).</div>"
+    )
+    return f"<div class=cards>{''.join(cards)}</div>"
+
+
+def _limits(doc: dict[str, Any]) -> str:
+    """What limits the design (a table) and the next decision (a sentence)."""
+    rows, gains = [], []
+    for r in doc["limits"]:
+        moved = f"{r['old']:.3g} → {r['new']:.3g} {r['unit']}" if np.isfinite(r["old"]) else "—"
+        gain = f"{r['gain']:+.2f} mm" if np.isfinite(r["gain"]) else "not estimated"
+        rows.append([r["meaning"], _number(r["multiplier"]) or "— (bound)", moved, gain])
+        gains.append(False)
+    if not rows:
+        return "<p><b>What limits it.</b> Nothing is active: the optimum is interior.</p>"
+    best = next((r for r in doc["limits"] if np.isfinite(r["gain"]) and r["gain"] > 0), None)
+    if best is not None:
+        gains[doc["limits"].index(best)] = True
+    if best is not None:
+        nxt = (
+            f"<b>Next decision.</b> Moving {html.escape(best['meaning'])} from {best['old']:.3g}"
+            f" to {best['new']:.3g} {html.escape(best['unit'])} would add "
+            f"<b>{best['gain']:.2f} mm</b> of disc radius ({html.escape(doc['model'])} model)."
+        )
+    else:
+        nxt = "<b>Next decision.</b> No limit moved by the step gains disc radius."
+    return (
+        f"<p><b>What limits it</b>, most costly first (multiplier: the largest |Lagrange "
+        f"multiplier| of the scaled NLP, kept for constraints only; gain: the study's NLP "
+        f"solved again from the optimum, with its materials, with only that limit moved by "
+        f"{RELAX:.0%} of its value, of its range for a bound):</p>"
+        f"{table(['limit', 'multiplier', 'moved', 'disc radius gain'], rows, gains)}"
+        f"<p class=next>{nxt}</p>"
+    )
+
+
+def _design_section(doc: dict[str, Any]) -> str:
+    rows = [
+        [
+            r["quantity"],
+            r["key"],
+            r["unit"],
+            f"{r['start']:.4g}",
+            f"{r['optimum']:.4g}",
+            "fixed" if r["low"] is None else f"{r['low']:.4g} – {r['high']:.4g}",
+        ]
+        for r in doc["design"]
+    ]
+    marked = [r["changed"] for r in doc["design"]]
+    m = [
+        [
+            "disc radius (mm)",
+            f"{doc['start']['disc_radius_mm']:.3f}",
+            f"{doc['best']['disc_radius_mm']:.3f}",
+            doc["model"],
+        ],
+        [
+            "disc radius (mm)",
+            f"{doc['forward']['start_disc_radius_mm']:.3f}",
+            f"{doc['forward']['best_disc_radius_mm']:.3f}",
+            doc["forward"]["model"],
+        ],
+    ] + [
+        [k, f"{doc['start'][k]:.3f}", f"{doc['best'][k]:.3f}", doc["model"]]
+        for k in doc["start"]
+        if k != "disc_radius_mm"
+    ]
+    mats = [
+        [r["catheter"], r["wire"], _number(r["objective"], ".2f"), f"{r['accepted']}/{r['starts']}"]
+        for r in doc["per_material"]
+    ]
+    chosen = [
+        [r["catheter"], r["wire"]] == [m or "as in the base design" for m in doc["materials"]]
+        for r in doc["per_material"]
+    ]
+    c_rows = [
+        [
+            k,
+            f"{v['value']:.4g}",
+            f"{v['limit']:.4g}",
+            v["unit"],
+            "active" if v["active"] else "",
+            f"{v['multiplier']:.2g}",
+        ]
+        for k, v in doc["constraints"].items()
+    ]
+    return f"""<h2 id="designs">The design, start and optimum</h2>
+<p>Every dimension in file units; the changed ones highlighted; bounds where the study
+frees a quantity.</p>
+{table(["quantity", "design-file key", "unit", "start", "optimum", "bounds"], rows, marked)}
+<h3>Metrics</h3>
+{table(["metric", "start", "optimum", "model"], m)}
+<p>reach_ratio is the smaller over the larger reach (y against z); 1 is round.</p>
+<h3>Per material (best accepted start, {html.escape(doc["model"])} model)</h3>
+{table(["catheter", "wire", "disc radius (mm)", "starts accepted"], mats, chosen)}
+<h3>Constraints at the optimum</h3>
+{
+        table(
+            ["constraint", "value", "limit", "unit", "active", "multiplier"],
+            c_rows,
+            [v["active"] for v in doc["constraints"].values()],
+        )
+    }"""
+
+
+def _parts_section(run: Run) -> str:
+    cad = run.results["cad"]
+    parts = cad["parts"]
+    p_rows = [
+        [
+            p["name"],
+            p["quantity"],
+            p["material"],
+            f"{p['mass_g']:.3g}",
+            " × ".join(f"{x:.3g}" for x in p["size_mm"]),
+            p["description"],
+        ]
+        for p in parts
+    ]
+    total = sum(p["mass_g"] * p["quantity"] for p in parts)
+    pngs = [Path(f) for f in cad["files"] if f.endswith(".png") and Path(f).exists()]
+    main = [p for p in pngs if p.parent.name != "parts"]
+    renders = "".join(thumb(p, p.stem.replace("_", " "), 390) for p in main)
+    renders += "".join(thumb(p, p.stem.replace("_", " "), 190) for p in pngs if p not in main)
+    shown, rest = check_rows(cad["checks"])
+
+    def rows(cs: list[dict]) -> list[list[object]]:
+        return [
+            [
+                c.get("item", ""),
+                c.get("check", ""),
+                _cell(c.get("value")),
+                c.get("unit", ""),
+                c.get("limit", ""),
+                "pass" if c.get("passed") else "FAIL",
+                c.get("note", ""),
+            ]
+            for c in cs
+        ]
+
+    header = ["item", "check", "value", "unit", "limit", "result", "note"]
+    failed = sum(not c.get("passed", True) for c in cad["checks"])
+    tight = table(header, rows(shown), [not c.get("passed", True) for c in shown]) if shown else ""
+    return f"""<h2 id="parts">Parts of the recommended design</h2>
+<p>Built from <code>{BEST_DESIGN}</code> (<code>cad/parts.csv</code>, STL and STEP in
+<code>cad/</code>); total mass {total:.1f} g.</p>
+{table(["part", "qty", "material", "mass (g)", "size (mm)", "what it is"], p_rows)}
+<div class=renders>{renders}</div>
+<h3>Printability and fit checks</h3>
+<p>{len(cad["checks"])} checks: {failed} failed; {len(shown)} shown below (failed, or within
+{TIGHT:.0%} of their limit).</p>
+{tight}
+{details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}"""
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, int | float | np.floating):
+        return f"{float(v):.4g}"
+    return str(v)
+
+
+STYLE = """body{font-family:sans-serif;max-width:1200px;margin:0.6em auto;color:#222;
+font-size:15px;line-height:1.35}h1{font-size:1.5em;margin:0.2em 0}
+table{border-collapse:collapse;margin:0.4em 0;font-size:13px}
+td,th{border:1px solid #bbb;padding:2px 7px}th{background:#eee}tr.mark td{background:#fff3c4}
+img{max-width:100%;margin:4px 0}.row{display:flex;gap:8px;align-items:flex-start}
+.row img{max-width:49%;height:auto}.cards{display:flex;gap:10px;margin:0.5em 0}
+.card{border:1px solid #bbb;border-radius:6px;padding:6px 10px;flex:1;font-size:14px}
+.card.main{border:2px solid #1f77b4;background:#eef5fb}
+.big{font-size:2.1em;font-weight:bold;color:#1f77b4}.question{margin:0.3em 0}
+.next{background:#eef8ee;padding:4px 8px;border-left:4px solid #2ca02c}
+.renders{display:flex;flex-wrap:wrap;gap:6px}figure{margin:0;font-size:12px}
+.setup{margin:0.2em 0;font-size:13px;color:#333}
+.first{border-bottom:2px solid #888;padding-bottom:0.3em}"""
+
+
 def write_report(run: Run) -> list[Path]:
     """``report.html``, ``results.json``, the figures and, where Chromium is installed,
     ``report.pdf`` (the page printed), in ``run.out``; the paths."""
@@ -91,13 +556,10 @@ def write_report(run: Run) -> list[Path]:
     best = run.results["optimise"]
     fwd = run.results["forward"]
     doc = results(run)
-    paths = []
-    plot_workspaces(fwd["start"], fwd["best"], figs / "workspace_section.png")
-    plot_projection(fwd["start"], run.study.base, figs / "start_top.png", (0, 1), "Start, top")
-    plot_projection(fwd["best"], best.design, figs / "best_top.png", (0, 1), "Optimum, top")
-    plot_projection(fwd["best"], best.design, figs / "best_side.png", (0, 2), "Optimum, side")
-    paths += [figs / n for n in ("workspace_section.png", "start_top.png", "best_top.png")]
-    paths.append(figs / "best_side.png")
+    work = doc["forward"]["model"]
+    paths = [figs / "workspace_section.png", figs / "tip_views.png"]
+    plot_workspaces(fwd["start"], fwd["best"], paths[0], work)
+    plot_tip_views(fwd["start"], fwd["best"], paths[1], work)
     if "pareto" in run.results:
         plot_fronts(run.results["pareto"], best, run.study, figs / "pareto.png")
         paths.append(figs / "pareto.png")
@@ -107,46 +569,15 @@ def write_report(run: Run) -> list[Path]:
         figs / "tolerance.png",
     )
     paths.append(figs / "tolerance.png")
+    images = {p.stem: img(p, p.stem) for p in paths}
 
-    start_d = _flat(design_to_dict(run.study.base))
-    best_d = _flat(design_to_dict(best.design))
-    param_rows = [
-        [k, f"{start_d[k]:.4g}", f"{best_d.get(k, float('nan')):.4g}"]
-        for k in start_d
-        if not np.isclose(start_d[k], best_d.get(k, np.nan), rtol=1e-9)
-    ]
-    m_rows = [[k, f"{doc['start'][k]:.3f}", f"{doc['best'][k]:.3f}"] for k in doc["start"]] + [
-        [
-            f"disc radius, {'+'.join(doc['forward']['model'])} model (mm)",
-            f"{doc['forward']['start_disc_radius_mm']:.3f}",
-            f"{doc['forward']['best_disc_radius_mm']:.3f}",
-        ]
-    ]
-    c_rows = [
-        [k, f"{v['value']:.4g}", f"{v['limit']:.4g}", v["unit"]]
-        for k, v in doc["constraints"].items()
-    ]
     t = doc["tolerance"]
     tol_rows = [[k, f"{s:g}", kind] for k, (kind, s) in TOLERANCES.items()]
     eff_rows = [
         [r["effect"], f"{r['max_shift_mm']:.2f}", f"{r['rms_shift_mm']:.2f}"]
         for r in doc["effects"]
     ]
-    cad = run.results["cad"]
-    check_rows = [
-        [
-            c.get("item", ""),
-            c.get("check", ""),
-            c.get("value", ""),
-            c.get("limit", ""),
-            c.get("passed", ""),
-        ]
-        for c in cad["checks"]
-    ]
-    pngs = {Path(f).name: Path(f) for f in cad["files"] if f.endswith(".png") and Path(f).exists()}
-    renders = [pngs[n] for n in ("assembly.png", "tip_section.png") if n in pngs] or list(
-        pngs.values()
-    )
+    fronts = "".join(f"<p>{html.escape(n)}</p>" for n in doc["pareto"].values())
     if "diagnosis" in run.results:
         dg = run.results["diagnosis"]
         causes = "".join(f"<li>{html.escape(c['evidence'])}</li>" for c in dg["causes"]) or (
@@ -161,37 +592,33 @@ def write_report(run: Run) -> list[Path]:
     timing_rows = [[k, f"{v:.1f}"] for k, v in run.seconds.items()]
     intro = run.study.description.strip()
     intro = intro if not intro or intro.endswith((".", "!", "?")) else intro + "."
-    images = {p.stem: img(p, p.stem) for p in paths}
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>ringpair study {html.escape(run.study.name)}</title>
-<style>body{{font-family:sans-serif;max-width:1150px;margin:2em auto;color:#222}}
-table{{border-collapse:collapse;margin:0.5em 0}}td,th{{border:1px solid #bbb;padding:3px 8px}}
-th{{background:#eee}}img{{max-width:100%;margin:4px 0}}.row{{display:flex;gap:8px}}
-.row img{{max-width:49%;height:auto}}.row{{align-items:flex-start}}</style></head><body>
+<style>{STYLE}</style></head><body>
+<section class=first id=answer>
 <h1>Design study: {html.escape(run.study.name)}</h1>
+{_question(run, doc)}
+{_answer(run, doc)}
+{_limits(doc)}
+</section>
 <h2 id="setup">Set-up</h2>
-<p>{html.escape(intro)} Study model: {", ".join(doc["model"])}; materials of
-the optimum: {", ".join(str(m) for m in doc["materials"])}.</p>
-<h2 id="designs">Starting vs optimised design</h2>
-{table(["metric", "start", "optimum"], m_rows)}
-<h3>Parameters that changed (file units)</h3>
-{table(["key", "start", "optimum"], param_rows)}
-<h3>Constraints at the optimum</h3>
-{table(["constraint", "value", "limit", "unit"], c_rows)}
-<div class="row">{images["start_top"]}{images["best_top"]}</div>
-<div class="row">{images["best_side"]}{images["workspace_section"]}</div>
-<h2 id="pareto">Pareto fronts</h2>
+<p>{html.escape(intro)} The study optimised with the {html.escape(doc["model"])} model;
+the figures, the tolerance spread and the headline's second number re-simulate the start
+and the optimum with the model for design work ({html.escape(work)}).</p>
+{_design_section(doc)}
+<h2 id="figures">Workspaces ({html.escape(work)} model)</h2>
+<div class="row">{images["workspace_section"]}</div>
+{images["tip_views"]}
+<h2 id="pareto">Pareto fronts ({html.escape(doc["model"])} model)</h2>
 {images.get("pareto", "<p>No sweeps in this study.</p>")}
-<h2 id="tolerance">Tolerance spread</h2>
+{fronts}
+<h2 id="tolerance">Tolerance spread ({html.escape(work)} model)</h2>
 <p>{t["samples"]} samples: disc radius {t["disc_radius_mean_mm"]:.3f} mm mean,
 {t["disc_radius_std_mm"]:.3f} mm standard deviation, 5-95 % range
 {t["disc_radius_p05_mm"]:.3f}-{t["disc_radius_p95_mm"]:.3f} mm.</p>
-{img(figs / "tolerance.png", "tolerance")}
+{images["tolerance"]}
 {table(["parameter", "one sigma (SI or relative)", "kind"], tol_rows)}
-<h2 id="parts">Parts and printability</h2>
-<p>Checks {"all passed" if cad["passed"] else "NOT all passed"} ({len(cad["checks"])}).</p>
-<div class="row">{"".join(img(p, p.stem) for p in renders[:2])}</div>
-{table(["item", "check", "value", "limit", "passed"], check_rows)}
+{_parts_section(run)}
 <h2 id="effects">Model effects (tip shift against the baseline, mm)</h2>
 {table(["effect", "max shift", "RMS shift"], eff_rows)}
 <h2 id="diagnosis">Diagnosis of measured data</h2>
@@ -201,9 +628,14 @@ the optimum: {", ".join(str(m) for m in doc["materials"])}.</p>
 </body></html>
 """
     write_text(out / "report.html", page)
-    write_text(out / "results.json", json.dumps(doc, indent=2, default=float) + "\n")
+    write_text(out / "results.json", json.dumps(doc, indent=2, default=_json) + "\n")
     pdf = print_pdf(out / "report.html", out / "report.pdf")
     return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
+
+
+def _json(value: Any) -> Any:
+    """numpy scalars as numbers, anything else as its string."""
+    return float(value) if isinstance(value, np.floating | np.integer) else str(value)
 
 
 def browser() -> str | None:
