@@ -335,11 +335,22 @@ def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, pa
         eps = np.array([p.epsilon for p in pts]) / unit
         obj = np.array([objective_in_report_units(study, p.objective) for p in pts])
         binds = np.array([binding(p, best.objective) for p in pts], dtype=bool)
-        ax.plot(eps, obj, "-", color="tab:blue", lw=1)
+        line_e, line_o = eps, obj
+        if best.feasible:  # a bound the optimum meets leaves it the front's point
+            line_e = np.r_[eps, best.metrics[against] / unit]
+            line_o = np.r_[obj, best_objective]
+        order = np.argsort(line_e)
+        ax.plot(line_e[order], line_o[order], "-", color="tab:blue", lw=1)
         ax.plot(eps[binds], obj[binds], "o", color="tab:blue", label="bound binds")
         ax.plot(eps[~binds], obj[~binds], "o", mfc="white", color="tab:blue", label="bound slack")
         if best.feasible:
-            ax.plot(best.metrics[against] / unit, best_objective, "r*", ms=14, label="best design")
+            ax.plot(
+                best.metrics[against] / unit,
+                best_objective,
+                "r*",
+                ms=14,
+                label="optimum (no bound)",
+            )
         ax.set_xlabel(label)
         ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
         ax.ticklabel_format(axis="y", useOffset=False)
@@ -388,7 +399,7 @@ def plot_tip_views(start: Workspace, best: Workspace, path: Path, model: str) ->
     zoomed on the tips (axes not to scale: the cloud is far narrower in x); the rest tip
     marked; ``model`` named in the title. Base frame [mm]."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    clouds = [(start, "tab:gray", "start"), (best, "tab:blue", "optimum")]
+    clouds = [(best, "tab:blue", "optimum"), (start, "tab:orange", "start")]
     every = np.vstack([ws.reachable for ws, _, _ in clouds]) / MM
     for ax, j, view in ((axes[0], 1, "top view (x-y)"), (axes[1], 2, "side view (x-z)")):
         for ws, colour, name in clouds:
@@ -404,11 +415,11 @@ def plot_tip_views(start: Workspace, best: Workspace, path: Path, model: str) ->
         ax.set_ylabel(f"{'xyz'[j]} [mm]")
         ax.set_title(view, fontsize=10)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8, loc="best", markerscale=3)
-    fig.suptitle(
-        f"Reachable tips, {model} model (zoomed on the tips; axes not to scale)", fontsize=10
-    )
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
+    title = f"Reachable tips, {model} model (zoomed on the tips; axes not to scale)"
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     _save(fig, path, dpi=110)
 
 

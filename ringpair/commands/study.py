@@ -145,13 +145,16 @@ def study(
     no_render: bool,
 ) -> None:
     """Run STUDY (default: the embedded demonstrator study) through every stage: starting
-    workspace, optimisation, Pareto sweeps (Dask), forward re-simulation with the model for
+    workspace, optimisation, what each active limit costs (the NLP solved again with that
+    limit moved 10 %), Pareto sweeps (Dask), forward re-simulation with the model for
     design work, tolerance Monte Carlo, model effects, CAD of the recommended design and
     (with --data) diagnosis.
 
-    Writes report.html (self-contained), results.json, manifest.json, the hand-off
-    (best_design.toml, a design file of the recommended design; pareto/pareto_<quantity>.csv;
-    cad/parts.csv with the parts' STL and STEP files) and each stage's files. Finished
+    Writes report.html (self-contained; its first screen: the question, the recommended
+    design and its gain, what limits it and the next decision), results.json,
+    manifest.json, the hand-off (best_design.toml, a design file of the recommended design;
+    pareto/pareto_<quantity>.csv; cad/parts.csv with the parts' STL and STEP files) and each
+    stage's files. Finished
     stages are reused when rerun with the same inputs. File formats: docs/formats.md.
 
     Exit codes: 0 done; 2 bad input; 3 a stage failed (named, with what was written).
