@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import html
 import json
 import re
 import shutil
@@ -280,3 +281,172 @@ def test_on_a_terminal_each_stage_is_a_live_line_that_ends_in_its_duration(monke
         "Pareto sweeps on Dask: 12.3 s",
         "optimisation: reused (it took 3.0 s)",
     ]
+
+
+def _first_screen(browser: str, page, tmp_path, selectors: tuple[str, ...]) -> dict:
+    """Where Chromium lays out each CSS selector's first element in a 1280 x 800 window:
+    the page copied with a script that writes the boxes into the DOM, read back with
+    --dump-dom. {selector: {"top", "bottom", "left", "right", "text"}} [CSS px]."""
+    import subprocess
+
+    probe = """<script>
+const boxes = {};
+for (const s of SELECTORS) {
+  const e = document.querySelector(s);
+  if (e) { const r = e.getBoundingClientRect();
+    boxes[s] = {top: r.top, bottom: r.bottom, left: r.left, right: r.right,
+                text: e.innerText}; }
+}
+const out = document.createElement("pre"); out.id = "probe";
+out.textContent = JSON.stringify(boxes); document.body.appendChild(out);
+</script></body>""".replace("SELECTORS", json.dumps(list(selectors)))
+    copy = tmp_path / "probe.html"
+    copy.write_text(page.read_text().replace("</body>", probe))
+    dom = subprocess.run(
+        [
+            browser,
+            "--headless",
+            "--disable-gpu",
+            "--no-sandbox",
+            "--hide-scrollbars",
+            "--window-size=1280,800",
+            "--dump-dom",
+            copy.resolve().as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    ).stdout
+    found = re.search(r'<pre id="probe">(.*?)</pre>', dom, re.S)
+    assert found, "the probe script did not run"
+    return json.loads(html.unescape(found.group(1)))
+
+
+def test_the_first_screen_carries_the_answer_in_headless_chromium(study_run, tmp_path):
+    browser = report_html.browser()
+    if browser is None:
+        pytest.skip("Chromium is not installed (Debian package 'chromium'; .ci/run installs it)")
+    _, out, _, _ = study_run
+    doc = json.loads((out / "results.json").read_text())
+    boxes = _first_screen(
+        browser, out / "report.html", tmp_path, ("#headline", "#forward", ".question", ".next")
+    )
+    headline = boxes["#headline"]
+    assert headline["text"].strip() == f"{doc['best']['disc_radius_mm']:.2f} mm"
+    assert boxes["#forward"]["text"].strip() == f"{doc['forward']['best_disc_radius_mm']:.2f} mm"
+    for selector, box in boxes.items():  # on the first screen, without scrolling
+        assert 0 <= box["top"] < box["bottom"] <= 800, (selector, box)
+        assert 0 <= box["left"] < box["right"] <= 1280, (selector, box)
+    # and Chromium drew it there: the headline's blue in the screenshot's headline box
+    shot = tmp_path / "first.png"
+    import subprocess
+
+    subprocess.run(
+        [
+            browser,
+            "--headless",
+            "--disable-gpu",
+            "--no-sandbox",
+            "--hide-scrollbars",
+            f"--screenshot={shot}",
+            "--window-size=1280,800",
+            (out / "report.html").as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    img = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    box = img[int(headline["top"]) : int(headline["bottom"]), int(headline["left"]) :]
+    blue = np.abs(box - np.array([0x1F, 0x77, 0xB4])).sum(axis=2) < 60
+    assert blue.sum() > 200, "the headline number is not drawn in its box"
+
+
+def test_report_design_table_has_every_dimension_with_its_bounds(study_run):
+    from design.registry import PARAMETERS, file_unit
+
+    path, out, _, _ = study_run
+    doc = json.loads((out / "results.json").read_text())
+    study = load_study(path)
+    rows = {r["key"]: r for r in doc["design"]}
+    keyed = [n for n, p in PARAMETERS.items() if p.field is not None and p.key is not None]
+    assert len(doc["design"]) == len(keyed) + 1  # and the magnet's distance to its centre
+    best = load_design(out / "best_design.toml")
+    for name in keyed:
+        p = PARAMETERS[name]
+        row = next(r for r in doc["design"] if r["quantity"] == p.meaning)
+        unit, scale = file_unit(name)
+        assert row["unit"] == unit
+        assert row["start"] == pytest.approx(p.value(study.base) / scale)
+        assert row["optimum"] == pytest.approx(p.value(best) / scale)
+        b = study.bound(name)
+        assert (row["low"], row["high"]) == (
+            (pytest.approx(b.low / scale), pytest.approx(b.high / scale)) if b else (None, None)
+        ), name
+    distance = rows["external_distance_mm (study file)"]
+    assert "centre" in distance["quantity"]
+    centre = np.asarray(best.external_magnet.center) * 1e3
+    assert distance["optimum"] == pytest.approx(centre[0] - best.robot.free_length * 1e3)
+    page = (out / "report.html").read_text()
+    assert "external magnet distance, rest tip to the magnet&#x27;s centre" in page
+
+
+def test_report_per_material_and_limits_come_from_the_solver(study_run):
+    path, out, _, _ = study_run
+    doc = json.loads((out / "results.json").read_text())
+    study = load_study(path)
+    chosen = [m["objective"] for m in doc["per_material"] if m["accepted"]]
+    assert max(chosen) == pytest.approx(doc["best"]["disc_radius_mm"], rel=1e-9)
+    assert sum(m["starts"] for m in doc["per_material"]) == study.starts * len(
+        study.catheter_materials or [None]
+    ) * len(study.wire_materials or [None])
+    active = {k for k, v in doc["constraints"].items() if v["active"]}
+    covered = {g for r in doc["limits"] for g in r["groups"]}
+    assert active | {a for a in doc["active"] if a.startswith("bound.")} <= covered
+    gains = [r["gain"] for r in doc["limits"] if r["gain"] is not None and np.isfinite(r["gain"])]
+    assert gains == sorted(gains, reverse=True)
+    # a relaxed limit never makes the re-solved optimum worse (IPOPT from the optimum)
+    assert all(g > -1e-6 * doc["best"]["disc_radius_mm"] for g in gains)
+    page = (out / "report.html").read_text()
+    if gains and gains[0] > 0:
+        top = doc["limits"][0]
+        assert f"would add <b>{top['gain']:.2f} mm</b>" in page and top["meaning"] in page
+
+
+def test_report_fronts_say_whether_their_bound_binds_as_the_csv_shows(study_run):
+    path, out, _, _ = study_run
+    doc = json.loads((out / "results.json").read_text())
+    rows, _ = _rows(out / "pareto" / "pareto_external_distance.csv")
+    optimum = doc["best"]["disc_radius_mm"]
+    binds = [
+        "epsilon.external_distance" in r["active"] and float(r["objective"]) < optimum * 0.999
+        for r in rows
+    ]
+    sentence = doc["pareto"]["external_distance"]
+    assert ("It binds from" in sentence) == any(binds)
+    assert ("does not bind" in sentence) == (not any(binds))
+    if any(binds):
+        lowest = min(float(r["objective"]) for r, b in zip(rows, binds, strict=True) if b)
+        assert f"disc radius is {lowest:.2f} mm" in sentence
+    assert sentence in (out / "report.html").read_text().replace("&#x27;", "'")
+
+
+def test_report_names_the_model_of_each_number_and_collapses_passing_checks(study_run):
+    from design.model import DEFAULT_EFFECTS, RingPairModel
+
+    path, out, _, _ = study_run
+    page = (out / "report.html").read_text()
+    study_model = RingPairModel(load_study(path).effects).name
+    work_model = RingPairModel(DEFAULT_EFFECTS).name
+    assert f"Model of the study: <b>{study_model}</b>" in page
+    assert f"Workspaces ({work_model} model)" in page
+    assert f"Pareto fronts ({study_model} model)" in page
+    checks = json.loads((out / "results.json").read_text())["cad"]["checks"]
+    shown = re.search(r"(\d+) checks: (\d+) failed; (\d+) shown below", page)
+    hidden = re.search(r"<summary>the other (\d+) checks, all passed</summary>", page)
+    assert shown and hidden
+    assert int(shown[1]) == checks and int(shown[3]) + int(hidden[1]) == checks
+    collapsed = page.split("<summary>the other", 1)[1].split("</details>")[0]
+    assert "FAIL" not in collapsed  # failures are never collapsed
+    assert collapsed.count("<td>pass</td>") == int(hidden[1])
