@@ -25,7 +25,6 @@ import numpy as np
 
 from design.atomic import atomic_path, write_text
 from design.model import DEFAULT_EFFECTS, RingPairModel
-from design.registry import PARAMETERS, file_unit
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
 from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run
@@ -36,7 +35,15 @@ from ringpair.plots import (
     plot_tolerance,
     plot_workspaces,
 )
-from ringpair.tables import PARETO_UNITS, objective_in_report_units
+from ringpair.tables import (
+    PARETO_UNITS,
+    TIGHT,
+    check_rows,
+    design_rows,
+    limit_rows,
+    material_rows,
+    objective_in_report_units,
+)
 
 OBJECTIVE_WORDS = {
     "disc_radius": "the largest disc of reachable tip positions around the rest tip (disc radius)",
@@ -60,10 +67,6 @@ LIMIT_WORDS = {
 """A study's limits (:class:`optimize.sizing.studyfile.Constraints` fields) in words, with
 the unit the report gives them in (SI per unit, label)."""
 
-TIGHT = 0.1
-"""A passing CAD check whose value is within this fraction of its limit is shown expanded
-with the failures (the others are collapsed)."""
-
 
 def _mm(x: float) -> str:
     return f"{x / MM:.3g}"
@@ -73,71 +76,6 @@ def model_names(run: Run) -> tuple[str, str]:
     """The study's model and the model for design work, by name ('baseline' or the
     effects joined by '+')."""
     return RingPairModel(run.study.effects).name, RingPairModel(DEFAULT_EFFECTS).name
-
-
-def design_rows(run: Run) -> list[dict[str, Any]]:
-    """Every dimension of the design, start and optimum, with the study's bounds for the
-    free ones (file units): quantity, key, unit, start, optimum, low, high (None: fixed),
-    changed. The external magnet's distance is the rest tip to the magnet's centre."""
-    best, study = run.results["optimise"], run.study
-    rows = []
-    for name, p in PARAMETERS.items():
-        if p.field is None or p.key is None:
-            continue
-        unit, scale = file_unit(name)
-        start, end = p.value(study.base) / scale, p.value(best.design) / scale
-        b = study.bound(name)
-        rows.append(
-            {
-                "quantity": p.meaning,
-                "key": p.key + (f"[{p.field[-2]}]" if p.field.endswith("]") else ""),
-                "unit": unit,
-                "start": start,
-                "optimum": end,
-                "low": b.low / scale if b else None,
-                "high": b.high / scale if b else None,
-                "changed": not np.isclose(start, end, rtol=1e-9, atol=1e-12),
-            }
-        )
-    b = study.bound("external_distance")
-    start_d, end_d = best.base_metrics["external_distance"], best.metrics["external_distance"]
-    rows.append(
-        {
-            "quantity": "external magnet distance, rest tip to the magnet's centre",
-            "key": "external_distance_mm (study file)",
-            "unit": "mm",
-            "start": start_d / MM,
-            "optimum": end_d / MM,
-            "low": b.low / MM if b else None,
-            "high": b.high / MM if b else None,
-            "changed": not np.isclose(start_d, end_d, rtol=1e-9),
-        }
-    )
-    return rows
-
-
-def material_rows(run: Run) -> list[dict[str, Any]]:
-    """Per material combination: the best accepted objective over its starts (report
-    units; NaN when no start was accepted), starts accepted and tried."""
-    best, study = run.results["optimise"], run.study
-    out: dict[tuple, dict[str, Any]] = {}
-    for s in best.starts:
-        row = out.setdefault(
-            s.materials,
-            {
-                "catheter": s.materials[0] or "as in the base design",
-                "wire": s.materials[1] or "as in the base design",
-                "objective": np.nan,
-                "accepted": 0,
-                "starts": 0,
-            },
-        )
-        row["starts"] += 1
-        if s.accepted:
-            row["accepted"] += 1
-            value = objective_in_report_units(study, s.objective)
-            row["objective"] = np.nanmax([row["objective"], value])
-    return list(out.values())
 
 
 def front_notes(run: Run) -> dict[str, str]:
@@ -193,50 +131,8 @@ def _at_bound(best: Any, against: str) -> bool:
     return any(a.startswith(f"bound.{against}.") for a in best.active)
 
 
-def limit_rows(run: Run) -> list[dict[str, Any]]:
-    """The sensitivity stage's rows (see :func:`ringpair.pipeline.sensitivity`), and the
-    active items it could not move, without a gain."""
-    best = run.results["optimise"]
-    rows = list(run.results.get("sensitivity", []))
-    covered = {g for r in rows for g in r["groups"]}
-    for item in best.active:
-        if item not in covered and not item.startswith("epsilon."):
-            rows.append(
-                {
-                    "meaning": item,
-                    "limit": item,
-                    "groups": [item],
-                    "unit": "",
-                    "old": np.nan,
-                    "new": np.nan,
-                    "multiplier": np.nan,
-                    "objective": np.nan,
-                    "gain": np.nan,
-                }
-            )
-    return rows
-
-
 def _number(x: Any, fmt: str = ".3g") -> str:
     return "" if x is None or not np.isfinite(x) else format(x, fmt)
-
-
-def check_rows(checks: list[dict[str, Any]]) -> tuple[list[dict], list[dict]]:
-    """The CAD checks split in those to show (failed, or passing within TIGHT of a
-    numeric limit ``>= x``/``<= x``) and the rest."""
-    shown: list[dict[str, Any]] = []
-    rest: list[dict[str, Any]] = []
-    for c in checks:
-        m = re.match(r"\s*(>=|<=|>|<)\s*(-?[0-9.eE+-]+)", str(c.get("limit", "")))
-        tight = False
-        if m and isinstance(c.get("value"), int | float | np.floating):
-            limit = float(m.group(2))
-            margin = (
-                float(c["value"]) - limit if m.group(1)[0] == ">" else limit - float(c["value"])
-            )
-            tight = margin < TIGHT * max(abs(limit), 1e-9)
-        (shown if tight or not c.get("passed", True) else rest).append(c)
-    return shown, rest
 
 
 def results(run: Run) -> dict[str, Any]:
@@ -275,11 +171,11 @@ def results(run: Run) -> dict[str, Any]:
         "start": metrics(best.base_metrics),
         "best": metrics(best.metrics),
         "materials": list(best.materials),
-        "per_material": material_rows(run),
-        "design": design_rows(run),
+        "per_material": material_rows(run.study, best),
+        "design": design_rows(run.study, best),
         "constraints": constraints,
         "active": list(best.active),
-        "limits": limit_rows(run),
+        "limits": limit_rows(best, run.results.get("sensitivity", [])),
         "pareto": front_notes(run),
         "forward": {
             "model": work_model,

@@ -1,15 +1,18 @@
 """Tables of results and their CSV files: simulated tip poses (columns named as in
-docs/formats.md), the model effects compared, the Pareto points. File units (mm, deg, MPa)."""
+docs/formats.md), the model effects compared, the Pareto points; and the study report's
+tables (every dimension with its bounds, results per material, what each limit costs, the
+CAD checks to show). File units (mm, deg, MPa)."""
 
 from __future__ import annotations
 
 import csv
 import io
 import os
+import re
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,9 +21,11 @@ from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
 from design.model import RingPairModel, available_effects
 from design.records import Design
+from design.registry import PARAMETERS, file_unit
 from design.units import MM, MM3
 
 if TYPE_CHECKING:
+    from optimize.sizing.nlp import OptimizationResult
     from optimize.sizing.pareto import ParetoPoint, ParetoResult
     from optimize.sizing.studyfile import Study
 
@@ -240,3 +245,115 @@ def _write(
     writer.writeheader()
     writer.writerows(rows)
     write_text(path, buf.getvalue())
+
+
+# ------------------------------------------------------------ the study report's tables
+
+TIGHT = 0.1
+"""A passing CAD check whose value is within this fraction of its limit is shown expanded
+with the failures (the others are collapsed)."""
+
+
+def design_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
+    """Every dimension of the design, start and optimum, with the study's bounds for the
+    free ones (file units): quantity, key, unit, start, optimum, low, high (None: fixed),
+    changed. The external magnet's distance is the rest tip to the magnet's centre."""
+    assert best.design is not None
+    rows = []
+    for name, p in PARAMETERS.items():
+        if p.field is None or p.key is None:
+            continue
+        unit, scale = file_unit(name)
+        start, end = p.value(study.base) / scale, p.value(best.design) / scale
+        b = study.bound(name)
+        rows.append(
+            {
+                "quantity": p.meaning,
+                "key": p.key + (f"[{p.field[-2]}]" if p.field.endswith("]") else ""),
+                "unit": unit,
+                "start": start,
+                "optimum": end,
+                "low": b.low / scale if b else None,
+                "high": b.high / scale if b else None,
+                "changed": not np.isclose(start, end, rtol=1e-9, atol=1e-12),
+            }
+        )
+    b = study.bound("external_distance")
+    start_d, end_d = best.base_metrics["external_distance"], best.metrics["external_distance"]
+    rows.append(
+        {
+            "quantity": "external magnet distance, rest tip to the magnet's centre",
+            "key": "external_distance_mm (study file)",
+            "unit": "mm",
+            "start": start_d / MM,
+            "optimum": end_d / MM,
+            "low": b.low / MM if b else None,
+            "high": b.high / MM if b else None,
+            "changed": not np.isclose(start_d, end_d, rtol=1e-9),
+        }
+    )
+    return rows
+
+
+def material_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
+    """Per material combination: the best accepted objective over its starts (report
+    units; NaN when no start was accepted), starts accepted and tried."""
+    out: dict[tuple, dict[str, Any]] = {}
+    for s in best.starts:
+        row = out.setdefault(
+            s.materials,
+            {
+                "catheter": s.materials[0] or "as in the base design",
+                "wire": s.materials[1] or "as in the base design",
+                "objective": np.nan,
+                "accepted": 0,
+                "starts": 0,
+            },
+        )
+        row["starts"] += 1
+        if s.accepted:
+            row["accepted"] += 1
+            value = objective_in_report_units(study, s.objective)
+            row["objective"] = np.nanmax([row["objective"], value])
+    return list(out.values())
+
+
+def limit_rows(best: OptimizationResult, moved: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The sensitivity stage's rows ``moved`` (:func:`ringpair.pipeline.sensitivity`), then
+    the active items of ``best`` it could not move, without a gain (NaN)."""
+    rows = list(moved)
+    covered = {g for r in rows for g in r["groups"]}
+    for item in best.active:
+        if item not in covered and not item.startswith("epsilon."):
+            rows.append(
+                {
+                    "meaning": item,
+                    "limit": item,
+                    "groups": [item],
+                    "unit": "",
+                    "old": np.nan,
+                    "new": np.nan,
+                    "multiplier": np.nan,
+                    "objective": np.nan,
+                    "gain": np.nan,
+                }
+            )
+    return rows
+
+
+def check_rows(checks: list[dict[str, Any]]) -> tuple[list[dict], list[dict]]:
+    """The CAD checks split in those to show (failed, or passing within TIGHT of a
+    numeric limit ``>= x``/``<= x``) and the rest."""
+    shown: list[dict[str, Any]] = []
+    rest: list[dict[str, Any]] = []
+    for c in checks:
+        m = re.match(r"\s*(>=|<=|>|<)\s*(-?[0-9.eE+-]+)", str(c.get("limit", "")))
+        tight = False
+        if m and isinstance(c.get("value"), int | float | np.floating):
+            limit = float(m.group(2))
+            margin = (
+                float(c["value"]) - limit if m.group(1)[0] == ">" else limit - float(c["value"])
+            )
+            tight = margin < TIGHT * max(abs(limit), 1e-9)
+        (shown if tight or not c.get("passed", True) else rest).append(c)
+    return shown, rest

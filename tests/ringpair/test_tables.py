@@ -35,3 +35,18 @@ def test_effect_shifts_skip_configurations_without_a_state(monkeypatch, demonstr
     assert by_effect["gravity"]["rms_shift_mm"] == pytest.approx(1.0)
     assert by_effect["gravity"]["without_state"] == 1
     assert by_effect["all"]["max_deflection_mm"] == pytest.approx(len(rows) - 1)
+
+
+def test_check_rows_show_failures_and_tight_margins_and_collapse_the_rest():
+    # The shapes of cad.checks' rows: limits as text, ">= x (process)" or "<= x".
+    checks = [
+        {"item": "a", "check": "min_wall", "value": 2.7, "limit": ">= 0.8 (fdm)", "passed": True},
+        {"item": "b", "check": "min_wall", "value": 0.85, "limit": ">= 0.8 (fdm)", "passed": True},
+        {"item": "c", "check": "volume", "value": 0.0995, "limit": "<= 0.1", "passed": True},
+        {"item": "d", "check": "volume", "value": 0.001, "limit": "<= 0.1", "passed": True},
+        {"item": "e", "check": "watertight", "value": 0.0, "limit": "1", "passed": False},
+        {"item": "f", "check": "shaft_angle", "value": 90.0, "limit": "90 +- 0.01", "passed": True},
+    ]
+    shown, rest = tables.check_rows(checks)
+    assert [c["item"] for c in shown] == ["b", "c", "e"]  # within 10 % of the limit, or failed
+    assert [c["item"] for c in rest] == ["a", "d", "f"]
