@@ -309,7 +309,7 @@ def _design_section(doc: dict[str, Any]) -> str:
             r["unit"],
             f"{r['start']:.4g}",
             f"{r['optimum']:.4g}",
-            "fixed" if r["low"] is None else f"{r['low']:.4g} – {r['high']:.4g}",
+            r["set_by"] if r["low"] is None else f"{r['low']:.4g} – {r['high']:.4g}",
         ]
         for r in doc["design"]
     ]
@@ -353,7 +353,8 @@ def _design_section(doc: dict[str, Any]) -> str:
     ]
     return f"""<h2 id="designs">The design, start and optimum</h2>
 <p>Every dimension in file units; the changed ones highlighted; bounds where the study
-frees a quantity.</p>
+frees a quantity, the material where the study's choice of material sets it, fixed
+otherwise.</p>
 {table(["quantity", "design-file key", "unit", "start", "optimum", "bounds"], rows, marked)}
 <h3>Metrics</h3>
 {table(["metric", "start", "optimum", "model"], m)}

@@ -254,10 +254,16 @@ TIGHT = 0.1
 with the failures (the others are collapsed)."""
 
 
+MATERIAL_SET = ("youngs_modulus", "poisson_ratio", "density")
+"""Properties of a tube that a study's material choice sets."""
+
+
 def design_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
     """Every dimension of the design, start and optimum, with the study's bounds for the
-    free ones (file units): quantity, key, unit, start, optimum, low, high (None: fixed),
-    changed. The external magnet's distance is the rest tip to the magnet's centre."""
+    free ones (file units): quantity, key, unit, start, optimum, low, high (None where not
+    free), set_by ('free', 'fixed', or 'catheter material'/'wire material' where the
+    study's material choice sets it), changed. The external magnet's distance is the rest
+    tip to the magnet's centre."""
     assert best.design is not None
     rows = []
     for name, p in PARAMETERS.items():
@@ -266,9 +272,13 @@ def design_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
         unit, scale = file_unit(name)
         start, end = p.value(study.base) / scale, p.value(best.design) / scale
         b = study.bound(name)
+        tube, _, what = name.partition("_")
+        chosen = study.catheter_materials if tube == "catheter" else study.wire_materials
+        by_material = what in MATERIAL_SET and bool(chosen)
         rows.append(
             {
                 "quantity": p.meaning,
+                "set_by": "free" if b else (f"{tube} material" if by_material else "fixed"),
                 "key": p.key + (f"[{p.field[-2]}]" if p.field.endswith("]") else ""),
                 "unit": unit,
                 "start": start,
@@ -283,6 +293,7 @@ def design_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
     rows.append(
         {
             "quantity": "external magnet distance, rest tip to the magnet's centre",
+            "set_by": "free" if b else "fixed",
             "key": "external_distance_mm (study file)",
             "unit": "mm",
             "start": start_d / MM,
