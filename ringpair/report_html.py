@@ -90,6 +90,7 @@ def front_notes(run: Run) -> dict[str, str]:
             continue
         unit, label = PARETO_UNITS[against]
         name, u = re.match(r"(.*) \[(.*)\]", label).groups()  # type: ignore[union-attr]
+        name = name.replace(", ", " (", 1) + ")" if ", " in name else name
         sense = "at most" if PARETO_QUANTITIES[against][2] == "max" else "at least"
         eps = np.array([p.epsilon for p in pts]) / unit
         obj = np.array([objective_in_report_units(study, p.objective) for p in pts])
@@ -111,10 +112,14 @@ def front_notes(run: Run) -> dict[str, str]:
             worst = int(np.nanargmin(o))
             slope = (opt - o[worst]) / max(abs(mine - e[worst]), 1e-12)
             text += (
-                f"It binds from {e.min():.3g} to {e.max():.3g} {u}: at {e[worst]:.3g} {u} the "
-                f"disc radius is {o[worst]:.2f} mm, {opt - o[worst]:.2f} mm below the "
-                f"optimum's, about {slope:.2g} mm of disc radius per {u} beyond the optimum's "
-                f"{mine:.3g} {u}."
+                (
+                    f"It binds at {e[0]:.3g} {u}"
+                    if len(e) == 1
+                    else f"It binds from {e.min():.3g} to {e.max():.3g} {u}"
+                )
+                + f": at {e[worst]:.3g} {u} the disc radius is {o[worst]:.2f} mm, "
+                f"{opt - o[worst]:.2f} mm below the optimum's, about {slope:.2g} mm of disc "
+                f"radius per {u} the bound is tightened past the optimum's {mine:.3g} {u}."
             )
         failed = int(np.count_nonzero(~np.array([p.feasible for p in pts])))
         if failed:
