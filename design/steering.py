@@ -12,14 +12,28 @@ angles with the exact derivative of the implicit function theorem,
 d tip / d theta = dP/dtheta - dP/dx (dr/dx)^-1 dr/dtheta (r the model's residual, P its
 pose; :func:`_sensitivity`, compiled from the model's own expressions).
 
-For a batch of targets: the tip is solved on a grid of ring angles (SEED_STEP); every
-local minimum of the distance to the target on that grid (the angles are periodic) seeds
-a Levenberg-Marquardt iteration on the angles (Nocedal & Wright, *Numerical Optimization*,
-2006, sec. 10.3), each trial angle pair solved for its state as every caller solves it;
-so do the rim's closest points, offset to either side of parallel rings (:func:`_rim_seeds`), and
-each result, its angles swapped, seeds one more (alike rings swapped give nearly the same
+For a batch of targets: the state and its tip are solved on a grid of ring angles
+(SEED_STEP), each cell split into two triangles, and the grid's piecewise-linear map is
+inverted: every triangle whose image holds a target gives a start, the angles and the
+state interpolated (:func:`_interpolated_seeds`). From there Newton on the state and the
+angles together (the model's residual and the tip's distance to the target: n + 2
+equations in n + 2 unknowns, exact Jacobian compiled from the model's own expressions,
+:func:`_inverse_step`) converges in a few steps, the whole batch in one mapped call per
+step, each start leaving the batch as it converges or joins another. The map from the
+angles (a torus) to the plane has degree zero, so a target's regular solutions come in
+pairs of opposite orientation (the sign of det d tip / d theta): where one is missing,
+each solution's angles swapped start once more (alike rings swapped give nearly the same
 net moment: the pair of solutions that merges at the workspace's rim, too close together
-for the grid).
+for the grid). A target is settled where its solutions pair up, each one solved on its
+own as every caller solves it (the load ramp) lands on it, and the grid resolves the map
+about it (no corner nearby without a state or after a snap).
+
+The other targets (out of reach, snaps, the map unresolved) are searched: every local
+minimum of the distance to the target on the grid (the angles are periodic) seeds a
+Levenberg-Marquardt iteration on the angles (Nocedal & Wright, *Numerical Optimization*,
+2006, sec. 10.3), each trial angle pair solved for its state as every caller solves it;
+so do the rim's closest points, offset to either side of parallel rings
+(:func:`_rim_seeds`), and each result's angles swapped.
 Solutions whose angles agree to SAME_ANGLE are one. A solution reaches its target when the
 tip is within REACHED of it; a target that no seed reaches gets the closest point found,
 flagged ``reached = False`` (out of reach, or only reached through a snap).
@@ -37,9 +51,10 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from scipy.spatial import cKDTree
 
 from design.compiled import compile_function
-from design.equilibrium import kernels, solve_equilibria
+from design.equilibrium import Equilibria, kernels, solve_equilibria
 from design.model import RingPairModel
 from design.registry import index
 from design.workspace import angle_grid
@@ -128,12 +143,11 @@ def _sensitivity(model: RingPairModel) -> ca.Function:
     )
 
 
-def _evaluate(
-    model: RingPairModel, params: np.ndarray, theta: np.ndarray
+def _sensitivities(
+    model: RingPairModel, params: np.ndarray, eq: Equilibria, theta: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The tip (y, z) of the state at each column of theta (2, P) [rad], its derivative
-    (P, 2, 2) and whether it has a state; (NaN where not)."""
-    eq = solve_equilibria(model, params, theta[0], theta[1])
+    """The tip (y, z) of the states ``eq`` at the columns of theta (2, P) [rad], its
+    derivative (P, 2, 2) and whether it has a state; (NaN where not)."""
     tip = np.full((2, theta.shape[1]), np.nan)
     jac = np.full((theta.shape[1], 2, 2), np.nan)
     ok = eq.stable.copy()
@@ -143,6 +157,14 @@ def _evaluate(
         jac[ok] = d.T.reshape(-1, 2, 2).transpose(0, 2, 1)
         ok[ok] = np.isfinite(jac[ok]).all(axis=(1, 2))
     return tip, jac, ok
+
+
+def _evaluate(
+    model: RingPairModel, params: np.ndarray, theta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tip (y, z) of the state at each column of theta (2, P) [rad], its derivative
+    (P, 2, 2) and whether it has a state; (NaN where not)."""
+    return _sensitivities(model, params, solve_equilibria(model, params, theta[0], theta[1]), theta)
 
 
 def _seeds(
@@ -281,7 +303,7 @@ def _iterate(
 
 def _wrapped(difference: np.ndarray) -> np.ndarray:
     """|angle difference| wrapped to [0, pi]. [rad]"""
-    return np.abs(np.angle(np.exp(1j * difference)))
+    return np.abs(np.mod(difference + np.pi, 2 * np.pi) - np.pi)
 
 
 def _distinct(theta: np.ndarray) -> np.ndarray:
@@ -306,7 +328,7 @@ def _fold_margin(
     f, kern = _sensitivity(model), kernels(model)
     unloaded = params.copy()
     unloaded[index("load_scale")] = 0.0
-    rest = np.asarray(model.initial.map(m)(theta[ok].T, unloaded))
+    rest = kern.run(model.initial, [theta[ok].T], unloaded)[0]
     dr_dx = kern.run(f, [unknowns[ok].T, theta[ok].T], params)[2].T.reshape(m, n, n)
     k = kern.run(f, [rest, theta[ok].T], unloaded)[2].T.reshape(m, n, n)
     ratio = np.linalg.solve(k.transpose(0, 2, 1), dr_dx.transpose(0, 2, 1))
@@ -314,35 +336,297 @@ def _fold_margin(
     return out
 
 
-def steer(
+NEWTON_ITERATIONS = 12
+"""Newton iterations on (state, angles) per seed at most (from an interpolated start they
+converge in three to five)."""
+CONVERGED = 1e-12
+"""Newton on (state, angles) has converged where every residual (the model's, m or rad,
+and the tip's distance to the target, m) is below this."""
+EDGE = 1e-9
+"""A target on a grid triangle's edge (barycentric coordinate down to -EDGE) is in it."""
+FOLD_BAND = 4.0
+"""Safety factor on the estimated reach of the map beyond a folded grid triangle's image
+(where a target's solutions may lie between the grid's points)."""
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The state on the periodic grid of ring angles ``step`` apart, G per ring, theta1
+    varying slowest (flat index i G + j at (i step, j step)).
+
+    tip : shape (G*G, 2), the tip (y, z), base frame, NaN where no state. [m]
+    jac : shape (G*G, 2, 2), d tip / d theta. [m/rad]
+    lag : shape (G*G, n), the state's unknowns, those that are ring angles less the
+        command (so that they interpolate across 2 pi). [SI]
+    snapped : shape (G*G,), the ramp to the state passed a fold.
+    """
+
+    step: float
+    tip: np.ndarray
+    jac: np.ndarray
+    lag: np.ndarray
+    snapped: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return int(round(np.sqrt(len(self.tip))))
+
+
+def _solve_grid(model: RingPairModel, params: np.ndarray, step: float) -> _Grid:
+    """The state, its tip and the tip's derivative on the grid of ring angles ``step``
+    apart [rad]; kept for the last few set-ups (a path steered at every trial size, a
+    design steered again)."""
+    return _solved_grid(model, np.asarray(params, float).tobytes(), float(step))
+
+
+@lru_cache(maxsize=4)
+def _solved_grid(model: RingPairModel, params_bytes: bytes, step: float) -> _Grid:
+    params = np.frombuffer(params_bytes).copy()
+    angles = angle_grid(step)
+    g1, g2 = np.meshgrid(angles, angles, indexing="ij")
+    theta = np.vstack([g1.ravel(), g2.ravel()])
+    eq = solve_equilibria(model, params, theta[0], theta[1])
+    tip, jac, _ = _sensitivities(model, params, eq, theta)
+    lag = eq.unknowns.copy()
+    if model.n_unknowns > model.n_rod:  # the rings' angles at the tip (torsion)
+        lag[:, model.n_rod :] -= theta.T
+    grid = _Grid(float(angles[1] - angles[0]), tip.T, jac, lag, eq.snapped.copy())
+    for a in (grid.tip, grid.jac, grid.lag, grid.snapped):
+        a.setflags(write=False)  # shared by every later call
+    return grid
+
+
+def _triangles(g: int) -> tuple[np.ndarray, np.ndarray]:
+    """The grid's cells split along their diagonal into triangles: (flat indices of the
+    vertices (T, 3), their (i, j) offsets from the cell's corner (T, 3, 2)); T = 2 g^2."""
+    i, j = (a.ravel() for a in np.meshgrid(np.arange(g), np.arange(g), indexing="ij"))
+    shapes = np.array([[[0, 0], [1, 0], [1, 1]], [[0, 0], [1, 1], [0, 1]]])
+    corner = np.stack([i, j], axis=-1)  # (g*g, 2)
+    vertex = corner[:, None, None, :] + shapes[None]  # (g*g, 2, 3, 2)
+    flat = (vertex[..., 0] % g) * g + vertex[..., 1] % g
+    return flat.reshape(-1, 3), vertex.reshape(-1, 3, 2)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """z component of u x v for rows of (P, 2)."""
+    return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+
+
+def _interpolated_seeds(
+    grid: _Grid, targets: np.ndarray, n_rod: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Starts for Newton from the grid's piecewise-linear map: every grid triangle whose
+    image holds a target gives the angles and the state there, interpolated; so does a
+    triangle across which the map folds (the derivative's determinant changes sign) for
+    a target just outside its image (the map's image there reaches beyond the
+    triangle's by about its curvature: FOLD_BAND times the change of the derivative along
+    an edge times the edge, over 8). Returns (target index (P,), angles (2, P) [rad],
+    unknowns (n, P) [SI], optional (P,): from a folded triangle, where the solution may
+    not exist; doubtful (M,): within twice a triangle's size of one whose corners lack a
+    state or snapped, where the grid may not resolve the solutions)."""
+    vertices, offsets = _triangles(grid.size)
+    corners = grid.tip[vertices]  # (T, 3, 2)
+    j = grid.jac
+    det = (j[:, 0, 0] * j[:, 1, 1] - j[:, 0, 1] * j[:, 1, 0])[vertices]
+    has = np.isfinite(corners).all(axis=(1, 2)) & np.isfinite(det).all(axis=1)
+    fold = has & ~((det > 0).all(axis=1) | (det < 0).all(axis=1))
+    # Each triangle's centre and reach (the corners with a state).
+    known = np.isfinite(corners).all(axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centre = np.where(known[..., None], corners, 0).sum(axis=1) / known.sum(axis=1)[:, None]
+        spread = np.linalg.norm(corners - centre[:, None], axis=2)
+    radius = np.where(known, spread, 0.0).max(axis=1)
+    # The linear interpolation's error along each edge (a, b): |(J(b) - J(a)) (b - a)| / 8.
+    jac = grid.jac[vertices]  # (T, 3, 2, 2)
+    edge = np.diff(offsets[:, [0, 1, 2, 0]], axis=1) * grid.step  # (T, 3, 2)
+    bend = np.einsum("tkij,tkj->tki", np.diff(jac[:, [0, 1, 2, 0]], axis=1), edge)
+    band = np.where(fold, FOLD_BAND * np.linalg.norm(bend, axis=2).max(axis=1) / 8, 0.0)
+    tree = cKDTree(targets)
+    doubtful = np.zeros(len(targets), bool)
+    odd = np.flatnonzero(np.isfinite(centre).all(axis=1) & (~has | grid.snapped[vertices].any(1)))
+    if odd.size:
+        near = tree.query_ball_point(centre[odd], 2 * radius[odd], return_sorted=False)
+        doubtful[[k for h in near for k in h]] = True
+    cand = np.flatnonzero(has)
+    hits = tree.query_ball_point(centre[cand], radius[cand] * (1 + EDGE) + band[cand])
+    counts = np.fromiter((len(h) for h in hits), int, len(hits))
+    tri = np.repeat(cand, counts)
+    owner = np.fromiter((k for h in hits for k in h), int, int(counts.sum()))
+    reach = (band + EDGE * radius)[tri, None]
+    box = (targets[owner] >= corners.min(axis=1)[tri] - reach).all(axis=1)
+    box &= (targets[owner] <= corners.max(axis=1)[tri] + reach).all(axis=1)
+    tri, owner = tri[box], owner[box]
+    a, b, c = (corners[tri, k] for k in range(3))
+    p = targets[owner]
+    area = _cross(b - a, c - a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weights = np.stack([_cross(c - b, p - b), _cross(a - c, p - c), _cross(b - a, p - a)], 1)
+        weights /= area[:, None]  # barycentric coordinates (P, 3)
+        # The distance to the triangle is at least that to the line of the farthest edge
+        # it is outside of (the height over that edge times minus its coordinate).
+        lengths = np.linalg.norm(np.stack([c - b, a - c, b - a], axis=1), axis=2)
+        outside = np.max(-weights * np.abs(area)[:, None] / lengths, axis=1)
+    inside = (area != 0) & (weights >= -EDGE).all(axis=1)
+    # Near a fold, also from inside the folded triangle next to the target (halfway from
+    # its closest corner or edge to its centre): the solutions there, if any, may lie
+    # beyond the grid's image.
+    beside = ~inside & fold[tri] & (outside <= band[tri])
+    weights[beside] = np.maximum(weights[beside], 0.0)
+    weights[beside] /= weights[beside].sum(axis=1, keepdims=True)
+    weights[beside] = 0.5 * weights[beside] + 0.5 / 3
+    use = inside | beside
+    tri, owner, weights, optional = tri[use], owner[use], weights[use], fold[tri[use]]
+    theta = grid.step * np.einsum("pk,pkc->cp", weights, offsets[tri])
+    lag = np.einsum("pk,pkn->np", weights, grid.lag[vertices[tri]])
+    if len(lag) > n_rod:
+        lag[n_rod:] += theta
+    return owner, theta, lag, optional, doubtful
+
+
+@lru_cache(maxsize=16)
+def _inverse_step(model: RingPairModel) -> ca.Function:
+    """(x, theta, target, params) -> (residual (n + 2): the model's r and the tip's (y, z)
+    less the target; Newton's step in (x, theta) for it; d(y, z)/d theta of the state
+    through x (2x2, column-major)), compiled: Newton on the state and the angles together,
+    with the exact derivatives of the model's own expressions."""
+    x = ca.SX.sym("x", model.n_unknowns)
+    theta = ca.SX.sym("theta", 2)
+    target = ca.SX.sym("target", 2)
+    prm = ca.SX.sym("params", model.residual.size1_in(2))
+    r = model.residual.call([x, theta, prm])[0]
+    tip = model.pose.call([x, theta, prm])[0][1:3]
+    dr_dx, dr_dtheta = ca.jacobian(r, x), ca.jacobian(r, theta)
+    dtip_dx, dtip_dtheta = ca.jacobian(tip, x), ca.jacobian(tip, theta)
+    residual = ca.vertcat(r, tip - target)
+    jac = ca.blockcat([[dr_dx, dr_dtheta], [dtip_dx, dtip_dtheta]])
+    d_tip = dtip_dtheta - dtip_dx @ ca.solve(dr_dx, dr_dtheta)
+    return compile_function(
+        ca.Function(
+            "inverse_step",
+            [x, theta, target, prm],
+            [residual, -ca.solve(jac, residual), ca.vec(d_tip)],
+        )
+    )
+
+
+def _newton(
+    model: RingPairModel,
+    params: np.ndarray,
+    target: np.ndarray,
+    theta: np.ndarray,
+    x: np.ndarray,
+    owner: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Newton on the state and the angles together from each column (target (2, P) [m],
+    theta (2, P) [rad], x (n, P) [SI]), each angle turned at most MAX_TURN per step, a
+    column leaving the batch as it converges, or as it comes within MERGE of another of
+    the same target (``owner``) with the same orientation (it goes on to the same
+    solution). Returns (angles (2, P) in [0, 2 pi), converged (P,), determinant of
+    d tip / d theta there (P,) [m^2/rad^2], the column each one merged into (P,), itself
+    if none; the unknowns (n, P))."""
+    theta, x = theta.copy(), x.copy()
+    n = model.n_unknowns
+    converged = np.zeros(theta.shape[1], bool)
+    det = np.full(theta.shape[1], np.nan)
+    into = np.arange(theta.shape[1])
+    a = np.arange(theta.shape[1])
+    for _ in range(NEWTON_ITERATIONS):
+        if a.size == 0:
+            break
+        residual, step, d_tip = kernels(model).run(
+            _inverse_step(model), [x[:, a], theta[:, a], target[:, a]], params
+        )
+        det[a] = d_tip[0] * d_tip[3] - d_tip[1] * d_tip[2]
+        done = np.abs(residual).max(axis=0) <= CONVERGED
+        converged[a[done]] = True
+        go = ~done & np.isfinite(step).all(axis=0)
+        step, a = step[:, go], a[go]
+        step *= np.minimum(1.0, MAX_TURN / np.maximum(np.abs(step[n:]).max(axis=0), 1e-300))
+        x[:, a] += step[:n]
+        theta[:, a] += step[n:]
+        # Columns of one target in the same MERGE cell, with the same orientation, are one.
+        cell = np.round(np.mod(theta[:, a], 2 * np.pi) / MERGE).astype(np.int64)
+        keys = np.vstack([owner[a], cell, np.sign(det[a]).astype(np.int64)])
+        _, first, group = np.unique(keys, axis=1, return_index=True, return_inverse=True)
+        into[a] = a[first[group.ravel()]]
+        a = a[into[a] == a]
+    det[~converged] = np.nan
+    return np.mod(theta, 2 * np.pi), converged, det, into, x
+
+
+def _distinct_columns(owner: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Indices of the first of each group of columns of theta (2, P) of the same owner
+    whose angles agree to SAME_ANGLE, ordered by owner."""
+    order = np.argsort(owner, kind="stable")
+    owner, theta = owner[order], theta[:, order]
+    start = np.searchsorted(owner, owner)  # each column's position in its owner's group
+    rank = np.arange(owner.size) - start
+    width = int(rank.max()) + 1 if owner.size else 0
+    groups = np.full((owner.size, width, 2), np.nan)
+    groups[start, rank] = theta.T  # (group by its first column, rank, angle)
+    earlier = groups[start]  # (P, width, 2): the columns of each one's group
+    same = (_wrapped(earlier - theta.T[:, None, :]) < SAME_ANGLE).all(axis=2)
+    same &= np.arange(width)[None, :] < rank[:, None]
+    return order[~same.any(axis=1)]
+
+
+def _rows(
     model: RingPairModel,
     params: np.ndarray,
     targets: np.ndarray,
-    *,
-    seeds: int = SEEDS,
-    seed_step: float = SEED_STEP,
+    target_index: np.ndarray,
+    theta: np.ndarray,
+    eq: Equilibria,
 ) -> Steering:
-    """Every pair of ring angles whose state puts the tip at each target (module
-    docstring).
+    """The answers ``theta`` (R, 2) [rad] (NaN: no answer) for targets ``target_index``
+    (R,), with their states ``eq`` (solved with ``multistable=True``)."""
+    valid = np.isfinite(theta).all(axis=1) & eq.stable
+    nan = np.where(valid, 1.0, np.nan)
+    position = eq.position * nan[:, None]
+    err = np.linalg.norm(position[:, 1:] - targets[target_index], axis=1)
+    return Steering(
+        target_index=target_index,
+        target=targets[target_index],
+        theta=theta,
+        position=position,
+        tangent=eq.tangent * nan[:, None],
+        error=err,
+        reached=valid & (err <= REACHED),
+        stable=valid,
+        snapped=valid & eq.snapped,
+        multistable=valid & eq.multistable,
+        fold_margin=_fold_margin(model, params, eq.unknowns * nan[:, None], theta),
+    )
 
-    targets : shape (M, 2), the tip's (y, z), base frame. [m]
-    params : model parameter vector, shape (k,), from ``model.parameters(design)``. [SI]
-    """
-    params = np.asarray(params, float)
-    targets = np.atleast_2d(np.asarray(targets, float))
-    if targets.shape[1] != 2 or not np.isfinite(targets).all() or len(targets) == 0:
-        raise ValueError("targets must be finite (y, z) pairs, shape (M, 2), M >= 1")
-    angles = angle_grid(seed_step)
+
+def _answers(
+    model: RingPairModel,
+    params: np.ndarray,
+    targets: np.ndarray,
+    target_index: np.ndarray,
+    theta: np.ndarray,
+) -> Steering:
+    """:func:`_rows` with the states at ``theta`` (R, 2) solved."""
+    eq = solve_equilibria(model, params, *np.nan_to_num(theta.T), multistable=True)
+    return _rows(model, params, targets, target_index, theta, eq)
+
+
+def _search(
+    model: RingPairModel, params: np.ndarray, targets: np.ndarray, grid: _Grid, seeds: int
+) -> Steering:
+    """Every solution for each target by Levenberg-Marquardt on the angles from the grid's
+    local minima of the distance, the rim's closest points and swapped solutions (module
+    docstring), or the closest point found."""
+    g = grid.size
+    angles = grid.step * np.arange(g)
     g1, g2 = np.meshgrid(angles, angles, indexing="ij")
     grid_theta = np.vstack([g1.ravel(), g2.ravel()])
-    grid_tip, grid_jac, _ = _evaluate(model, params, grid_theta)
-    owner, cell, resolution = _seeds(
-        grid_tip.T.reshape(len(angles), len(angles), 2), targets, seeds
-    )
+    grid_tip, grid_jac = grid.tip.T, grid.jac
+    owner, cell, resolution = _seeds(grid.tip.reshape(g, g, 2), targets, seeds)
     # One Newton step from each seed with the grid's derivative (at most a grid step):
     # seeds that it brings together go on as one.
     residual = (grid_tip[:, cell] - targets[owner].T).T
-    step = _step(grid_jac[cell], residual, np.full(cell.size, 1e-9), seed_step)
+    step = _step(grid_jac[cell], residual, np.full(cell.size, 1e-9), grid.step)
     start = grid_theta[:, cell] + np.where(np.isfinite(step), step, 0.0).T
     cells = np.round(np.mod(start, 2 * np.pi) / SEED_MERGE).astype(np.int64)
     _, first = np.unique(np.vstack([owner, cells]), axis=1, return_index=True)
@@ -388,21 +672,78 @@ def steer(
     has = picked >= 0
     theta_rows = np.full((len(picked), 2), np.nan)
     theta_rows[has] = theta[:, picked[has]].T
-    eq = solve_equilibria(model, params, *np.nan_to_num(theta_rows.T), multistable=True)
-    valid = has & eq.stable
-    nan = np.where(valid, 1.0, np.nan)
-    position = eq.position * nan[:, None]
-    err = np.linalg.norm(position[:, 1:] - targets[target_index], axis=1)
+    return _answers(model, params, targets, target_index, theta_rows)
+
+
+def _concatenate(parts: list[Steering], order: np.ndarray) -> Steering:
+    """The rows of ``parts`` one after the other, taken in ``order``."""
     return Steering(
-        target_index=target_index,
-        target=targets[target_index],
-        theta=theta_rows,
-        position=position,
-        tangent=eq.tangent * nan[:, None],
-        error=err,
-        reached=valid & (err <= REACHED),
-        stable=valid,
-        snapped=valid & eq.snapped,
-        multistable=valid & eq.multistable,
-        fold_margin=_fold_margin(model, params, eq.unknowns * nan[:, None], theta_rows),
+        **{
+            name: np.concatenate([getattr(p, name) for p in parts])[order]
+            for name in Steering.__dataclass_fields__
+        }
     )
+
+
+def steer(
+    model: RingPairModel,
+    params: np.ndarray,
+    targets: np.ndarray,
+    *,
+    seeds: int = SEEDS,
+    seed_step: float = SEED_STEP,
+) -> Steering:
+    """Every pair of ring angles whose state puts the tip at each target (module
+    docstring).
+
+    targets : shape (M, 2), the tip's (y, z), base frame. [m]
+    params : model parameter vector, shape (k,), from ``model.parameters(design)``. [SI]
+    """
+    params = np.asarray(params, float)
+    targets = np.atleast_2d(np.asarray(targets, float))
+    if targets.shape[1] != 2 or not np.isfinite(targets).all() or len(targets) == 0:
+        raise ValueError("targets must be finite (y, z) pairs, shape (M, 2), M >= 1")
+    grid = _solve_grid(model, params, seed_step)
+    m = len(targets)
+    owner, start, x, optional, doubtful = _interpolated_seeds(grid, targets, model.n_rod)
+    theta, converged, det, into, x = _newton(model, params, targets[owner].T, start, x, owner)
+    # A target is doubtful where a start inside the grid's image neither converged nor
+    # joined another start that did.
+    np.logical_and.at(optional, into, optional.copy())
+    doubtful[owner[~converged & ~optional & (into == np.arange(into.size))]] = True
+    # The map from the angles (a torus) to the plane has degree 0: a target's regular
+    # solutions come in pairs of opposite orientation. Where one is missing (near the
+    # workspace's rim, where a pair merges at the fold), each solution's angles swapped
+    # start once more (alike rings: the swap is nearly the other of the pair).
+    keep = np.flatnonzero(converged)
+    keep = keep[_distinct_columns(owner[keep], theta[:, keep])]
+    positive = np.bincount(owner[keep], det[keep] > 0, minlength=m)
+    negative = np.bincount(owner[keep], det[keep] < 0, minlength=m)
+    odd = keep[(positive != negative)[owner[keep]]]
+    if odd.size:
+        swapped = x[:, odd].copy()
+        swapped[model.n_rod :] = swapped[model.n_rod :][::-1]  # the rings' angles (torsion)
+        more = _newton(model, params, targets[owner[odd]].T, theta[::-1, odd], swapped, owner[odd])
+        owner = np.concatenate([owner, owner[odd]])
+        theta = np.hstack([theta, more[0]])
+        converged = np.concatenate([converged, more[1]])
+        det = np.concatenate([det, more[2]])
+        keep = np.flatnonzero(converged)
+        keep = keep[_distinct_columns(owner[keep], theta[:, keep])]
+        positive = np.bincount(owner[keep], det[keep] > 0, minlength=m)
+        negative = np.bincount(owner[keep], det[keep] < 0, minlength=m)
+    # A target is settled where its solutions pair up, the grid resolves the map about it
+    # and every answer, solved as every caller solves it, is reached; the rest are left to
+    # the search from the grid's local minima (out of reach, snaps, unresolved folds).
+    settled = (positive == negative) & (positive > 0) & ~doubtful
+    keep = keep[settled[owner[keep]]]
+    fast = _answers(model, params, targets, owner[keep], theta[:, keep].T)
+    settled[fast.target_index[~fast.reached]] = False
+    fast = _concatenate([fast], np.flatnonzero(settled[fast.target_index]))
+    parts = [fast]
+    rest = np.flatnonzero(~settled)
+    if rest.size:
+        slow = _search(model, params, targets[rest], grid, seeds)
+        parts.append(Steering(**{**slow.__dict__, "target_index": rest[slow.target_index]}))
+    index_all = np.concatenate([p.target_index for p in parts])
+    return _concatenate(parts, np.argsort(index_all, kind="stable"))
