@@ -225,6 +225,11 @@ class RingPairModel:
     - ``check`` -> (r, monitor, position, frame, tip angles, clearance of the rings to the
       external magnet (:func:`magnet_clearance`)), for a final state;
     - ``pose`` -> (position (3), frame (3x3), tip angles (2));
+    - ``internal`` -> (the rod's bending moment at the clamp (3) and at its end (3, the
+      part across the end's tangent) [N m], base frame; each transmission's twist (2),
+      L / GJ times the axial torque on its ring, the stops' included [rad]: the twist with
+      ``torsion``, its first-order estimate without), at equilibrium; the strain and twist
+      limits of design studies;
     - ``initial`` (command, params) -> x0, the unloaded robot (straight, tip angles =
       command; against its stops with ``torsion`` and ``printed_tip``,
       :func:`design.stops.resting_angles`).
@@ -266,6 +271,7 @@ class RingPairModel:
     check: ca.Function = field(init=False, repr=False, compare=False)
     pose: ca.Function = field(init=False, repr=False, compare=False)
     initial: ca.Function = field(init=False, repr=False, compare=False)
+    internal: ca.Function = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         effects = frozenset(self.effects)
@@ -316,7 +322,8 @@ class RingPairModel:
                 (s.tip.distal_arm, s.tip.distal_mass),
             ]
         # Twist of each transmission per unit axial torque, L / GJ. [rad / (N m)]
-        twist = length / s.torsional_rigidity if torsion else None
+        twist_compliance = length / s.torsional_rigidity
+        twist = twist_compliance if torsion else None
         commanded = command
         if stops:
             commanded = ca.vertcat(*commanded_angles(command, s["stop_angle"], s["pretwist"]))
@@ -391,8 +398,23 @@ class RingPairModel:
             scale = ca.vertcat(*[length if k < 3 else 1 for k in range(n)])
             metric = (length / ei) * ca.diag(scale**2) @ gradient_map
             direction, fall_matrix = metric @ r, metric @ jac_solver
+        # The rod's internal loads (strain and twist limits of design studies).
+        end_loads = applied(position, frame, angles)
+        tangent = frame[:, 0]
+        end_moment = end_loads[3:6] - ca.dot(end_loads[3:6], tangent) * tangent
+        if large:  # the base wrench is an unknown: m0 = x[3:6] EI / L
+            base_moment = x[3:6] * ei / rod_length
+        else:
+            base_moment = cantilever.base_moment(
+                end_loads[0:3], end_moment, rod_length, distributed
+            )
         if printed:  # the tracked point, from the rod's end
             position = position + offset * frame[:, 0]
+        if torsion:
+            axial = end_loads[6:8]
+        else:
+            axial = self._axial_torques(field_model, position, frame, angles, moment, s, load)
+        transmission_twist = twist_compliance * axial
         clearance = magnet_clearance(s, position, frame)
         # Newton's step and the load tangent share one factorisation.
         newton_solve = ca.solve(jac_solver, ca.horzcat(r, -dr_dload))
@@ -434,6 +456,14 @@ class RingPairModel:
                 [position, frame, angles],
                 io,
                 ["position", "frame", "tip_angles"],
+                opts,
+            ),
+            "internal": ca.Function(
+                "internal",
+                arguments,
+                [base_moment, end_moment, transmission_twist],
+                io,
+                ["base_moment", "end_moment", "twist"],
                 opts,
             ),
         }

@@ -139,7 +139,7 @@ def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np
     """Configurations where the NLP's equilibria x (n, K) are not the states the robot
     reaches (:func:`design.solve_equilibria`: stable, connected to the unloaded robot), and
     those states (n, K), NaN where there is none."""
-    eq = solve_equilibria(c.model, prm, c.commands[0], c.commands[1])
+    eq = solve_equilibria(c.model, c.configuration_params(prm), c.commands[0], c.commands[1])
     reached = eq.unknowns.T
     scale = c.model.unknown_scale(prm)[:, None]
     with np.errstate(invalid="ignore"):
@@ -151,7 +151,7 @@ def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray
     """Forward equilibria of ``design`` at the study's configurations: (core, v, X, eq)."""
     c = core(_nlp_shape(study))
     p = parameter_vector(design)
-    eq = solve_equilibria(c.model, p, c.commands[0], c.commands[1])
+    eq = solve_equilibria(c.model, c.configuration_params(p), c.commands[0], c.commands[1])
     return c, free_values(study, design), eq.unknowns.T.copy(), eq
 
 
@@ -352,7 +352,7 @@ def _solve_one(
     bounds = group_bounds(study, cat, wire, epsilon)
     states = _states(c, g, bounds)
     violation = _violation(states)
-    res = np.asarray(c.model.residual.map(k_all)(x, c.commands, np.tile(prm[:, None], k_all))[0])
+    res = np.asarray(c.column.map(k_all)(x, c.commands, c.configuration_params(prm))[0])
     equilibrium = float(np.abs(res / xs[:, None]).max()) if res.size else 0.0
     success = bool(stats.get("success", False))
     message = ""

@@ -18,12 +18,11 @@ Formulation (one material combination, one start):
   area of the parallel loop (seen along x); ``reach_ratio``: t <= w_z / w_y and
   t <= w_y / w_z with the y and z widths of the loop (smooth maxima in the NLP, exact
   sample maxima when reported).
-- Constraints (named groups, reported by name): bending strain at the base and at the tip
-  of the rod (|M| / EI x outer radius, M from the rod's stiffness and its coordinates,
-  at the base by :func:`design.cantilever.base_moment`) of each tube within its
-  material's allowable strain; twist of each transmission
-  (|axial torque| L / GJ, from the ``torsion`` model's own torque expression, or the
-  solved tip angles when ``torsion`` is on) within the limit at every configuration;
+- Constraints (named groups, reported by name): bending strain at the clamp and at the
+  rod's end (|M| / EI x outer radius, M from the model's ``internal`` function) of each
+  tube within its material's allowable strain; twist of each transmission (L / GJ times
+  the axial torque on its ring, from the same function: the solved twist with
+  ``torsion``, its first-order estimate without) within the limit at every configuration;
   rings on the wire and the wire in the catheter with clearance (at least
   :data:`design.geometry.WIRE_CLEARANCE`); walls; the largest outer diameter; clearance
   of both rings to the external magnet at every configuration (the model's
@@ -48,7 +47,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from design import cantilever
+from design.compiled import compile_functions
 from design.geometry import (
     disc_radius,
     external_distance,
@@ -78,8 +77,13 @@ METRICS = (
     "magnet_volume",
     "external_distance",
     "catheter_outer_diameter",
+    "sag",
 )
-"""Workspace and design metrics reported for every solution, SI (m, m^2, -, m^3)."""
+"""Workspace and design metrics reported for every solution, SI (m, m^2, -, m^3).
+``neutral_deflection``: the largest distance of an antiparallel-ring tip from the tip at
+rest with the field off (how well the rings cancel); ``sag``: that rest tip's distance
+from the straight robot's (its own weight); the workspace (disc, reach) is measured from
+the straight robot's tip."""
 
 # group: (file-unit scale, unit label, meaning)
 GROUPS: dict[str, tuple[float, str, str]] = {
@@ -148,92 +152,181 @@ def _smooth_max(values: ca.SX, scale: ca.SX) -> ca.SX:
     return scale * (top + ca.log(ca.sum1(ca.exp(a - top)))) / SMOOTH_MAX_SHARPNESS
 
 
+FIELD_OFF = ("magnet_remanence", "external_remanence")
+"""Parameters set to zero for the robot with the field off (the magnets unmagnetised: no
+field, no ring moments, no ring coupling), which leaves only its own weight."""
+
+
+def field_off(params: np.ndarray) -> np.ndarray:
+    """The parameter vector(s) ``params`` (..., len(NAMES)) with the field off (FIELD_OFF
+    zero). [SI]"""
+    out = np.array(params, float)
+    for name in FIELD_OFF:
+        out[..., index(name)] = 0.0
+    return out
+
+
 @dataclass(frozen=True)
 class Core:
     """The study's metrics and constraint rows as CasADi functions of (v, X, P).
 
-    v : free quantities (SI), shape (n_free,); X : unknowns, shape (n, K + K_n);
-    P : model parameter vector of the start design, shape (len(NAMES),).
-    ``rows`` lists the constraint group of every row of ``g``.
+    v : free quantities (SI), shape (n_free,); X : unknowns at :attr:`commands`, shape
+    (n, K + 2 K_n + 1); P : model parameter vector of the start design, shape
+    (len(NAMES),). The last configuration is the robot at rest with the field off
+    (:func:`field_off`; straight without gravity), the reference of the neutral loop.
+    ``rows`` lists the constraint group of every row of ``g``. Each configuration's
+    equilibrium residual, pose and internal loads come from one function of the model
+    (``column``), mapped over the configurations, so that the NLP's compiled code holds
+    one copy of the model.
     """
 
     shape: NlpShape
     model: RingPairModel
     commands: np.ndarray
     params: ca.Function  # (v, P) -> prm
-    evaluate: ca.Function  # (v, X, P) -> g, metrics, side distances, widths, area_signed
+    column: ca.Function  # (x, command, prm) -> r, rows, tip deflection from straight
+    compiled: ca.Function  # the same in native code, with its Jacobian (first derivatives)
+    evaluate: ca.Function  # (v, X, P, scale) -> g, metrics, side distances, widths, area
+    exact: ca.Function  # the same from ``column``, twice differentiable (exact Hessians)
     rows: tuple[str, ...]
     variable_groups: frozenset[str]
     """Groups that depend on the free quantities (the others cannot be active)."""
+
+    def configuration_params(self, params: np.ndarray) -> np.ndarray:
+        """The parameter vector of every configuration, one per column, shape
+        (len(NAMES), K'): ``params``, the last with the field off. [SI]"""
+        out = np.tile(np.asarray(params, float), (self.commands.shape[1], 1))
+        out[-1] = field_off(out[-1])
+        return out.T
+
+
+COLUMN_ROWS = (
+    "strain.catheter",
+    "strain.wire",
+    "strain.catheter",
+    "strain.wire",
+    "twist.wire",
+    "twist.catheter",
+    "magnet_clearance",
+)
+"""Constraint rows of one configuration: bending strain at the clamp, then at the rod's
+end, the transmissions' twist, the rings' clearance to the external magnet."""
+
+
+def _column(model: RingPairModel) -> ca.Function:
+    """One configuration: (x, command, prm) -> (equilibrium residual, COLUMN_ROWS, tip
+    deflection from the straight robot's tip (3)). [SI]"""
+    x = ca.SX.sym("x", model.n_unknowns)
+    c = ca.SX.sym("command", 2)
+    prm = ca.SX.sym("params", len(NAMES))
+    s = Symbols(prm)
+    r, _ = model.residual(x, c, prm)
+    position, frame, _ = model.pose(x, c, prm)
+    base_moment, end_moment, twist = model.internal(x, c, prm)
+    rows = []
+    for moment in (base_moment[1:3], end_moment):
+        curvature = ca.sqrt(ca.sumsqr(moment) + TINY**2) / s.bending_rigidity
+        rows += [
+            curvature * s["catheter_outer_diameter"] / 2,
+            curvature * s["wire_outer_diameter"] / 2,
+        ]
+    rows += [twist[0], twist[1], magnet_clearance(s, position, frame)]
+    deflection = position - rest_position(s["free_length"])
+    return ca.Function(
+        "study_column",
+        [x, c, prm],
+        [r, ca.vertcat(*rows), deflection],
+        ["x", "command", "params"],
+        ["r", "rows", "deflection"],
+        {"cse": True},
+    )
+
+
+def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
+    """The rows that depend on the design alone, and prm -> (those rows, magnet volume,
+    external distance, catheter OD). [SI]"""
+    prm = ca.SX.sym("params", len(NAMES))
+    s = Symbols(prm)
+    wire = s["wire_outer_diameter"]
+    # the printed tip's outer diameter (design.mounting) where the model has it
+    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
+    volume = 2 * ring_volume(
+        s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
+    )
+    distance = external_distance(s["free_length"], s.external_center)
+    rows = [
+        ("ring_on_wire", s["magnet_inner_diameter"] - wire),
+        ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
+        ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
+        ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
+        ("ring_diameter", tip_diameter),
+        ("catheter_diameter", s["catheter_outer_diameter"]),
+        ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
+        ("epsilon.external_distance", distance),
+        ("epsilon.magnet_volume", volume),
+    ]
+    fn = ca.Function(
+        "study_design",
+        [prm],
+        [ca.vertcat(*[r for _, r in rows]), volume, distance, s["catheter_outer_diameter"]],
+    )
+    return tuple(g for g, _ in rows), fn
 
 
 @lru_cache(maxsize=8)
 def core(shape: NlpShape) -> Core:
     """Build the metric and constraint expressions of a shape (cached)."""
     model = RingPairModel(shape.effects)
-    torsion = "torsion" in shape.effects
-    twist_model = None if torsion else RingPairModel(shape.effects | {"torsion"})
-    n, nf = model.n_unknowns, len(shape.free)
-    cmd = commands(shape)
-    k_par, k_all = shape.configurations, cmd.shape[1]
-    v = ca.SX.sym("v", nf)
-    big_x = ca.SX.sym("X", n, k_all)
-    base = ca.SX.sym("P", len(NAMES))
-    prm = _params_expression(shape.free, v, base)
-    s = Symbols(prm)
-    length, ei = s["free_length"], s.bending_rigidity
-    rest = rest_position(length)
-    gravity = s["load_scale"] * s.rod_mass_per_length * s.gravity
-    w = gravity if "gravity" in shape.effects else ca.SX.zeros(3)
-    stiff = cantilever.stiffness(length, ei)
-    w_response = cantilever.distributed_load_response(w, length, ei)
+    nf = len(shape.free)
+    cmd = np.hstack([commands(shape), np.zeros((2, 1))])  # the last: at rest, field off
+    v_sx, base_sx = ca.SX.sym("v", nf), ca.SX.sym("P", len(NAMES))
+    params = ca.Function(
+        "study_params", [v_sx, base_sx], [_params_expression(shape.free, v_sx, base_sx)],
+        ["v", "P"], ["params"],
+    )  # fmt: skip
+    column = _column(model)
+    compiled = compile_functions([column, column.jacobian()])[0]
+    design = _design_rows("printed_tip" in shape.effects)
+    evaluate, groups, free_groups = _evaluation(shape, cmd, params, compiled, design)
+    exact = _evaluation(shape, cmd, params, column, design)[0]
+    return Core(shape, model, cmd, params, column, compiled, evaluate, exact, groups, free_groups)
 
-    rows: list[tuple[str, ca.SX]] = []
-    deflection = []
-    for k in range(k_all):
-        x, c = big_x[:, k], ca.DM(cmd[:, k])
-        position, frame, angles = model.pose(x, c, prm)
-        deflection.append(position - rest)
-        # Bending moment at the base and at the tip from the rod's loads Q = K (q - q_w).
-        f_y, f_z, t_y, t_z = ca.vertsplit(stiff @ (x[:4] - w_response))
-        force, torque = ca.vertcat(0, f_y, f_z), ca.vertcat(0, t_y, t_z)
-        base_moment = cantilever.base_moment(force, torque, length, w)[1:3]
-        for moment in (base_moment, torque[1:3]):
-            curvature = ca.sqrt(ca.sumsqr(moment) + TINY**2) / ei
-            rows.append(("strain.catheter", curvature * s["catheter_outer_diameter"] / 2))
-            rows.append(("strain.wire", curvature * s["wire_outer_diameter"] / 2))
-        if twist_model is None:
-            twist = angles - c
-        else:
-            r_twist, _ = twist_model.residual(ca.vertcat(x[:4], c), c, prm)
-            twist = -r_twist[4:6]
-        rows.append(("twist.wire", twist[0]))
-        rows.append(("twist.catheter", twist[1]))
-        rows.append(("magnet_clearance", magnet_clearance(s, position, frame)))
-        if k_par <= k < k_par + shape.neutral_configurations:
-            rows.append(("neutral", ca.sqrt(ca.sumsqr(deflection[-1]) + TINY**2)))
-    wire = s["wire_outer_diameter"]
-    printed = "printed_tip" in shape.effects
-    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
-    rows += [
-        ("ring_on_wire", s["magnet_inner_diameter"] - wire),
-        ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
-        ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
-        ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
-        # the printed tip's outer diameter (design.mounting) where the model has it
-        ("ring_diameter", tip_diameter),
-        ("catheter_diameter", s["catheter_outer_diameter"]),
-    ]
-    volume = 2 * ring_volume(
-        s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
-    )
-    distance = external_distance(length, s.external_center)
-    rows += [
-        ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
-        ("epsilon.external_distance", distance),
-        ("epsilon.magnet_volume", volume),
-    ]
-    d = ca.horzcat(*deflection[:k_par])[1:, :]  # (2, K), y and z of the parallel loop
+
+def _configuration_params(prm: ca.MX, count: int) -> ca.MX:
+    """The parameter vector of each of ``count`` configurations, the last with the field
+    off (:func:`field_off`), shape (len(NAMES), count)."""
+    mask = np.ones(len(NAMES))
+    mask[[index(name) for name in FIELD_OFF]] = 0.0
+    return ca.horzcat(ca.repmat(prm, 1, count - 1), prm * ca.DM(mask))
+
+
+def _evaluation(
+    shape: NlpShape,
+    cmd: np.ndarray,
+    params: ca.Function,
+    column: ca.Function,
+    design: tuple[tuple[str, ...], ca.Function],
+) -> tuple[ca.Function, tuple[str, ...], frozenset[str]]:
+    """The study's rows and metrics from ``column`` mapped over the configurations:
+    (v, X, P, scale) -> (g, metrics, side distances, widths, signed area); the group of
+    every row of g; the groups that depend on the free quantities or the unknowns."""
+    n, nf, k_all = column.size1_in(0), len(shape.free), cmd.shape[1]
+    k_par, kn = shape.configurations, shape.neutral_configurations
+    design_groups, design_rows = design
+    v = ca.MX.sym("v", nf)
+    big_x = ca.MX.sym("X", n, k_all)
+    base = ca.MX.sym("P", len(NAMES))
+    scale = ca.MX.sym("scale")
+    prm = params(v, base)
+    _, rows_k, deflection = column.map(k_all)(big_x, ca.DM(cmd), _configuration_params(prm, k_all))
+    rest = deflection[:, -1]  # the robot at rest, field off
+    neutral = deflection[:, k_par : k_par + kn] - ca.repmat(rest, 1, kn)
+    neutral_distance = ca.sqrt(ca.sum1(neutral * neutral) + TINY**2).T
+    g_design, volume, distance, catheter = design_rows(prm)
+    g = ca.vertcat(ca.vec(rows_k[:, : k_all - 1]), neutral_distance, g_design)
+    groups = COLUMN_ROWS * (k_all - 1) + ("neutral",) * kn + design_groups
+
+    d = deflection[1:, :k_par]  # (2, K), y and z of the parallel loop
     dist = ca.sqrt(ca.sum1(d * d) + TINY**2).T
     sides = segment_distances(d.T)
     area_signed = 0.5 * ca.sum2(
@@ -241,20 +334,19 @@ def core(shape: NlpShape) -> Core:
     )
     reach_y = (ca.mmax(d[0, :]) - ca.mmin(d[0, :])) / 2
     reach_z = (ca.mmax(d[1, :]) - ca.mmin(d[1, :])) / 2
-    neutral = ca.horzcat(*deflection[k_par : k_par + shape.neutral_configurations])
     metrics = ca.vertcat(
         disc_radius(d.T),
         ca.fabs(area_signed),
         reach_y,
         reach_z,
         ca.fmin(reach_y, reach_z) / ca.fmax(ca.fmax(reach_y, reach_z), 1e-300),
-        ca.mmax(ca.sqrt(ca.sum1(neutral * neutral))),
+        ca.mmax(neutral_distance),
         ca.mmax(dist),
         volume,
         distance,
-        s["catheter_outer_diameter"],
+        catheter,
+        ca.sqrt(ca.sumsqr(rest) + TINY**2),
     )
-    scale = ca.SX.sym("scale")
     widths = ca.vertcat(
         _smooth_max(d[0, :].T, scale) + _smooth_max(-d[0, :].T, scale),
         _smooth_max(d[1, :].T, scale) + _smooth_max(-d[1, :].T, scale),
@@ -262,15 +354,16 @@ def core(shape: NlpShape) -> Core:
     evaluate = ca.Function(
         "study_metrics",
         [v, big_x, base, scale],
-        [ca.vertcat(*[r for _, r in rows]), metrics, sides, widths, area_signed],
+        [g, metrics, sides, widths, area_signed],
         ["v", "X", "P", "scale"],
         ["g", "metrics", "side_distances", "widths", "area_signed"],
-        {"cse": True},
     )
-    params = ca.Function("study_params", [v, base], [prm], ["v", "P"], ["params"])
     unknowns = ca.vertcat(v, ca.vec(big_x))
-    free_groups = frozenset(g for g, r in rows if ca.depends_on(r, unknowns))
-    return Core(shape, model, cmd, params, evaluate, tuple(g for g, _ in rows), free_groups)
+    free_groups = frozenset(
+        grp for grp, k in zip(groups, range(g.numel()), strict=True)
+        if ca.depends_on(g[k], unknowns)
+    )  # fmt: skip
+    return evaluate, groups, free_groups
 
 
 @dataclass(frozen=True)
@@ -305,30 +398,34 @@ def _ipopt_options(max_iterations: int, tolerance: float, hessian: str) -> dict[
     }
 
 
-def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray, list[str]]:
+def _symbolic_nlp(
+    c: Core, relaxed: bool, exact: bool
+) -> tuple[dict[str, ca.MX], np.ndarray, list[str]]:
     """NLP expressions. Variables (z, x~, rho~, t[, slacks]); returns (nlp, row scales of the
-    inequality part, group of each inequality row)."""
+    inequality part, group of each inequality row). ``exact``: from the model's own
+    expressions, twice differentiable (exact Hessians), else from their compiled twin with
+    its Jacobian (:mod:`design.compiled`; about 20x faster per evaluation)."""
     st = c.shape
     n, nf, k_all = c.model.n_unknowns, len(st.free), c.commands.shape[1]
-    z = ca.SX.sym("z", nf)
-    xt = ca.SX.sym("xt", n, k_all)
-    rho_t = ca.SX.sym("rho")
-    t = ca.SX.sym("t")
-    p_base = ca.SX.sym("P", len(NAMES))
-    xs = ca.SX.sym("xs", n)
-    lo, hi = ca.SX.sym("lo", nf), ca.SX.sym("hi", nf)
-    norms = ca.SX.sym("norms", 3)
-    area_sign, scale = ca.SX.sym("area_sign"), ca.SX.sym("dscale")
-    weights = ca.SX.sym("weights", 3)
+    z = ca.MX.sym("z", nf)
+    xt = ca.MX.sym("xt", n, k_all)
+    rho_t = ca.MX.sym("rho")
+    t = ca.MX.sym("t")
+    p_base = ca.MX.sym("P", len(NAMES))
+    xs = ca.MX.sym("xs", n)
+    lo, hi = ca.MX.sym("lo", nf), ca.MX.sym("hi", nf)
+    norms = ca.MX.sym("norms", 3)
+    area_sign, scale = ca.MX.sym("area_sign"), ca.MX.sym("dscale")
+    weights = ca.MX.sym("weights", 3)
     v = lo + (hi - lo) * z
     big_x = xt * ca.repmat(xs, 1, k_all)
     prm = c.params(v, p_base)
-    g_rows, _, sides, widths, area_signed = c.evaluate(v, big_x, p_base, scale)
+    column = c.column if exact else c.compiled
+    evaluate = c.exact if exact else c.evaluate
+    g_rows, _, sides, widths, area_signed = evaluate(v, big_x, p_base, scale)
     rho = rho_t * norms[0]
-    equilibrium = []
-    for k in range(k_all):
-        r, _ = c.model.residual(big_x[:, k], ca.DM(c.commands[:, k]), prm)
-        equilibrium.append(r / xs)
+    r_all = column.map(k_all)(big_x, ca.DM(c.commands), _configuration_params(prm, k_all))[0]
+    equilibrium = [ca.vec(r_all / ca.repmat(xs, 1, k_all))]
     groups = list(c.rows) + ["min_disc_radius", "min_reach_ratio"]
     row_scale = np.array([GROUPS[g][0] for g in groups])
     ineq = ca.vertcat(g_rows, rho, t) / ca.DM(row_scale)
@@ -340,7 +437,7 @@ def _symbolic_nlp(c: Core, relaxed: bool) -> tuple[dict[str, ca.SX], np.ndarray,
     params = ca.vertcat(p_base, xs, lo, hi, norms, area_sign, weights, scale)
     if relaxed:
         names = list(GROUPS)
-        slack = ca.SX.sym("slack", len(names))
+        slack = ca.MX.sym("slack", len(names))
         which = ca.DM([names.index(g) for g in groups])
         s_rows = ca.vertcat(*[slack[int(i)] for i in np.asarray(which).ravel()])
         g = ca.vertcat(*equilibrium, epigraph, ineq + s_rows, ineq - s_rows)
@@ -360,7 +457,7 @@ def problem(
     ``hessian_approximation``, "exact" (second derivatives of the model) or
     "limited-memory" (L-BFGS from the exact gradients)."""
     c = core(shape)
-    nlp, row_scale, _ = _symbolic_nlp(c, relaxed=False)
+    nlp, row_scale, _ = _symbolic_nlp(c, relaxed=False, exact=hessian == "exact")
     options = _ipopt_options(max_iterations, tolerance, hessian)
     solver = ca.nlpsol("design_nlp", "ipopt", nlp, options)
     return Problem(c, solver, nlp["x"].numel(), nlp["g"].numel(), row_scale)
@@ -371,6 +468,6 @@ def restoration(
     shape: NlpShape, max_iterations: int, hessian: str = "limited-memory"
 ) -> ca.Function:
     """The minimum-violation NLP of a shape (one slack per constraint group)."""
-    nlp, _, _ = _symbolic_nlp(core(shape), relaxed=True)
+    nlp, _, _ = _symbolic_nlp(core(shape), relaxed=True, exact=hessian == "exact")
     options = _ipopt_options(max_iterations, 1e-8, hessian)
     return ca.nlpsol("design_restoration", "ipopt", nlp, options)
