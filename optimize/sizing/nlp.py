@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from design.equilibrium import solve_equilibria
+from design.equilibrium import drive, solve_equilibria
 from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
 from design.records import Design
@@ -145,6 +145,36 @@ def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np
     with np.errstate(invalid="ignore"):
         differs = ~(np.max(np.abs(reached - x) / scale, axis=0) <= BRANCH_TOLERANCE)
     return np.flatnonzero(differs), reached
+
+
+def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
+    """Why the robot could not be driven around the study's loops through its sampled
+    states x (n, K'), or '' when it can: each loop (parallel rings, the workspace's rim;
+    antiparallel, the neutral loop; rings at right angles) is driven from every sample to
+    the next (:func:`design.equilibrium.drive`, sub-steps of 1 degree, failing where the
+    robot would snap) and must arrive at the next sample's state; and no sampled state
+    may share its command with another stable state (``multistable``)."""
+    k, kn = c.shape.configurations, c.shape.neutral_configurations
+    scale = c.model.unknown_scale(prm)[:, None]
+    loops = (("parallel", 0, k), ("antiparallel", k, kn), ("right-angle", k + kn, kn))
+    for name, first, count in loops:
+        idx = first + np.arange(count)
+        ahead = np.roll(idx, -1)
+        end = c.commands[:, idx] + 2 * np.pi / count  # the next sample, unwrapped
+        reached, ok = drive(c.model, prm, x[:, idx], c.commands[:, idx], end)
+        with np.errstate(invalid="ignore"):
+            same = np.max(np.abs(reached - x[:, ahead]) / scale, axis=0) <= BRANCH_TOLERANCE
+        bad = np.flatnonzero(~(ok & same))
+        if bad.size:
+            where = ", ".join(f"{i}-{(i + 1) % count}" for i in bad[:4])
+            return f"the {name} loop snaps between samples {where} (of {count})"
+    sampled = c.commands[:, :-1]
+    eq = solve_equilibria(
+        c.model, c.configuration_params(prm)[:, :-1], sampled[0], sampled[1], multistable=True
+    )
+    if eq.multistable.any():
+        return f"multistable at configurations {np.flatnonzero(eq.multistable).tolist()[:6]}"
+    return ""
 
 
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
@@ -368,6 +398,8 @@ def _solve_one(
             f"the equilibria at configurations {off.tolist()} are not the states the robot "
             "reaches there (another branch, or unstable)"
         )
+    elif study.limits.stable:
+        message = _loop_faults(c, prm, x)
     accepted = success and not message
     lam_g = np.asarray(sol["lam_g"]).ravel()
     result = StartResult(
