@@ -17,8 +17,10 @@ name = "demonstrator-workspace"           # free text, names the outputs
 description = "optional free text"
 base_design = "embedded"                  # the demonstrator (default), or a design file
                                           # path, relative to the study file
-effects = "none"                          # "none" (baseline), "all", "torsion,gravity" or
-                                          # a list; near_field, torsion, gravity
+effects = "none"                          # "none" (baseline), "default" (the model for
+                                          # design work), "all", "default,printed_tip" or
+                                          # a list; near_field, large_deflection, torsion,
+                                          # gravity, printed_tip
 objective = "disc_radius"                 # or "area", "reach_ratio", or a weighted table:
 # objective = { disc_radius = 1.0, reach_ratio = 0.5 }  (each term divided by its value
 #                                         # for the base design, then weighted and summed)
@@ -93,7 +95,7 @@ from typing import Any
 
 from design.designfile import DesignError, default_design, load_design, read_input
 from design.geometry import WIRE_CLEARANCE
-from design.model import EFFECTS
+from design.model import DEFAULT_EFFECTS, EFFECTS, PRINTED_TIP
 from design.records import Design
 from design.registry import PARAMETERS, current, file_key, file_unit
 from design.suggest import did_you_mean
@@ -156,9 +158,8 @@ PARETO_QUANTITIES = {
 }
 """Pareto sweep quantities: workspace against the catheter size, the magnet's distance
 and the magnet volume. ``max``: the quantity is bounded above by epsilon, ``min``: below."""
-STUDY_EFFECTS = ("near_field", "torsion", "gravity")
-"""Effects a study may switch on (hysteresis needs ordered paths; large_deflection is not
-wired into the model yet)."""
+STUDY_EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", PRINTED_TIP)
+"""Effects a study may switch on, and the printed tip (hysteresis needs ordered paths)."""
 
 
 @dataclass(frozen=True)
@@ -347,26 +348,34 @@ def _free(node: Any) -> tuple[Bound, ...]:
 
 
 def _effects(value: Any) -> frozenset[str]:
+    """The study's model: 'none', 'default' (the model for design work), 'all'
+    (STUDY_EFFECTS), a comma list (which may include 'default') or a list of names."""
     if isinstance(value, str):
         text = value.strip()
-        if text in ("", "none", "baseline"):
-            return frozenset()
-        names = list(STUDY_EFFECTS) if text == "all" else [t.strip() for t in text.split(",")]
+        if text == "all":
+            return frozenset(STUDY_EFFECTS)
+        names = [n.strip() for n in text.split(",") if n.strip()]
+        if text in ("none", "baseline"):
+            names = []
     elif isinstance(value, list) and all(isinstance(v, str) for v in value):
         names = [v.strip() for v in value]
     else:
         raise StudyError(
-            f"effects must be 'none', 'all', a comma list or a list of effect names; got {value!r}"
+            "effects must be 'none', 'default', 'all', a comma list or a list of effect "
+            f"names; got {value!r}"
         )
+    if "default" in names:  # 'default,torsion': the model for design work and more
+        names = [n for n in names if n != "default"] + sorted(DEFAULT_EFFECTS)
     for n in names:
         if n not in STUDY_EFFECTS:
             why = (
-                " (known to the model but not usable in a study)"
+                " (known to the model but not usable in a study: it needs ordered paths)"
                 if n in EFFECTS
                 else did_you_mean(n, STUDY_EFFECTS)
             )
             raise StudyError(
-                f"effects must name effects among {', '.join(STUDY_EFFECTS)}; got {n!r}{why}"
+                f"effects must name effects among {', '.join(STUDY_EFFECTS)} (or 'default'); "
+                f"got {n!r}{why}"
             )
     return frozenset(names)
 
