@@ -58,6 +58,10 @@ BRANCH_TOLERANCE = 1e-6
 """An NLP equilibrium is the robot's state when its unknowns are within this of the state
 forward simulation reaches (dimensionless: unknowns over their scale, i.e. 1e-6 of the
 free length or 1e-6 rad; IPOPT's equilibria are exact to about 1e-8 of that scale)."""
+ARRIVAL_TOLERANCE = 1e-4
+"""A loop driven from one sample arrives at the next sample's state when the unknowns agree
+within this (as BRANCH_TOLERANCE; looser, since a snap moves them by far more and the
+driven states carry the path solver's tolerance besides IPOPT's)."""
 ACTIVE_TOLERANCE = 1e-5
 """A constraint row is active when within this of its limit (file unit) or its multiplier
 is nonzero."""
@@ -149,7 +153,8 @@ def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np
 
 def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
     """Why the robot could not be driven around the study's loops through its sampled
-    states x (n, K'), or '' when it can: each loop (parallel rings, the workspace's rim;
+    states x (n, K'; the states forward simulation reaches, which the NLP's equal), or ''
+    when it can: each loop (parallel rings, the workspace's rim;
     antiparallel, the neutral loop; rings at right angles) is driven from every sample to
     the next (:func:`design.equilibrium.drive`, sub-steps of 1 degree, failing where the
     robot would snap) and must arrive at the next sample's state; and no sampled state
@@ -162,8 +167,11 @@ def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
         ahead = np.roll(idx, -1)
         end = c.commands[:, idx] + 2 * np.pi / count  # the next sample, unwrapped
         reached, ok = drive(c.model, prm, x[:, idx], c.commands[:, idx], end)
+        expected = x[:, ahead].copy()
+        if c.model.n_unknowns > c.model.n_rod:  # tip angles: a turn further at the wrap
+            expected[c.model.n_rod :] += end - c.commands[:, ahead]
         with np.errstate(invalid="ignore"):
-            same = np.max(np.abs(reached - x[:, ahead]) / scale, axis=0) <= BRANCH_TOLERANCE
+            same = np.max(np.abs(reached - expected) / scale, axis=0) <= ARRIVAL_TOLERANCE
         bad = np.flatnonzero(~(ok & same))
         if bad.size:
             where = ", ".join(f"{i}-{(i + 1) % count}" for i in bad[:4])
@@ -399,7 +407,7 @@ def _solve_one(
             "reaches there (another branch, or unstable)"
         )
     elif study.limits.stable:
-        message = _loop_faults(c, prm, x)
+        message = _loop_faults(c, prm, reached)
     accepted = success and not message
     lam_g = np.asarray(sol["lam_g"]).ravel()
     result = StartResult(

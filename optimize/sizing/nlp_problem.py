@@ -6,10 +6,15 @@ Formulation (one material combination, one start):
 - Variables: the free quantities, scaled to [0, 1] by their bounds; the model's unknowns
   x_k at K parallel-ring configurations (theta1 = theta2 = phi_j, phi_j = 2 pi j / K: the
   boundary of the reachable set, :mod:`design.workspace`) and at K_n antiparallel ones
-  (theta1 = phi_j + pi, theta2 = phi_j: the neutral loop), each scaled by its size at the
-  warm start; epigraph variables rho (disc radius) and t (reach ratio).
+  (theta1 = phi_j + pi, theta2 = phi_j: the neutral loop), K_n with the rings at right
+  angles, and the robot at rest with the field off (:func:`field_off`), each scaled by its
+  size at the warm start; epigraph variables rho (disc radius) and t (reach ratio).
 - Equilibrium: ``RingPairModel.residual(x_k, command_k, params) = 0`` for every k, where
-  ``params`` is the base design's parameter vector with the free entries replaced.
+  ``params`` is the base design's parameter vector with the free entries replaced. Any
+  model the study names (``effects``): the baseline, the model for design work, torsion
+  with the printed tip's stops (stop angle and pre-twist may be free). Each
+  configuration's residual, pose and internal loads are one function of the model,
+  compiled with its Jacobian (:mod:`design.compiled`) and mapped over the configurations.
 - Objectives (maximised; several are weighted after division by their base-design value):
   ``disc_radius``: rho <= the distance from p_rest to each side of the parallel loop
   seen along x (:func:`design.geometry.segment_distances`; the largest disc around the
@@ -27,13 +32,18 @@ Formulation (one material combination, one start):
   :data:`design.geometry.WIRE_CLEARANCE`); walls; the largest outer diameter; clearance
   of both rings to the external magnet at every configuration (the model's
   :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
-  bounding sphere); the neutral tip deflection within tolerance; optional lower bounds on
+  bounding sphere); the neutral deflection within tolerance (each antiparallel tip's
+  distance from the tip at rest with the field off: how well the rings cancel; the sag
+  under the robot's own weight is the ``sag`` metric, and shifts the loop about the
+  straight tip, which the disc radius measures); optional lower bounds on
   disc radius and reach ratio; epsilon bounds (Pareto) on the catheter diameter, the
   magnet distance and the magnet volume. After the solve every sampled equilibrium must
   be the state the robot reaches there (:func:`design.solve_equilibria`: stable and
   connected to the unloaded robot by the load ramp); where IPOPT followed another branch,
   it starts once more from that design with the robot's states, and an optimum still on
-  another branch is rejected (``stable = true``, the default).
+  another branch is rejected; so is one whose loops cannot be driven from sample to
+  sample without a snap, or with a multistable sampled state (``stable = true``, the
+  default; :func:`optimize.sizing.nlp._loop_faults`).
 
 SI units are used for all inputs and outputs; file units only in reports.
 """

@@ -141,6 +141,8 @@ FREE_KEYS: dict[str, FreeKey] = {
                 "catheter_inner_diameter",
                 "catheter_youngs_modulus",
                 "wire_outer_diameter",
+                "stop_angle",  # the mounting pieces' stops (torsion and printed_tip)
+                "pretwist",
             )
         ),
         # not a model parameter: the magnet placed on the axis (design.geometry)
@@ -535,6 +537,14 @@ def study_from_dict(doc: dict[str, Any], folder: Path | None = None) -> Study:
                 "between 0 and 0.5, e.g. 0.03"
             )
     solver = _solver(doc.get("solver", {}))
+    effects = _effects(doc.get("effects", "none"))
+    for b in free:
+        if b.name in ("stop_angle", "pretwist") and not {"torsion", PRINTED_TIP} <= effects:
+            raise StudyError(
+                f"free.{file_key(b.name)} acts through the mounting pieces' stops, which the "
+                "model has with effects torsion and printed_tip; got effects "
+                f"{', '.join(sorted(effects)) or 'none'}"
+            )
     return Study(
         name=name,
         base=base,
@@ -543,7 +553,7 @@ def study_from_dict(doc: dict[str, Any], folder: Path | None = None) -> Study:
         constraints=constraints,
         catheter_materials=catheter,
         wire_materials=wire,
-        effects=_effects(doc.get("effects", "none")),
+        effects=effects,
         pareto=_pareto(doc.get("pareto", [])),
         description=description,
         base_source=source,

@@ -124,6 +124,11 @@ BAD = [
         ["effects", "'hysteresis'", "not usable in a study"],
     ),
     (
+        "[free]\n",
+        "[free]\nstop_angle_deg = [10.0, 90.0]\n",
+        ["free.stop_angle_deg", "torsion and printed_tip", "got effects none"],
+    ),
+    (
         'name = "s"',
         'name = "s"\nbase_design = "nowhere.toml"',
         ["base_design", "does not exist"],
