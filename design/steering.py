@@ -51,7 +51,6 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-from scipy.spatial import cKDTree
 
 from design.compiled import compile_function
 from design.equilibrium import Equilibria, kernels, solve_equilibria
@@ -60,8 +59,8 @@ from design.registry import index
 from design.workspace import angle_grid
 
 SEED_STEP = np.deg2rad(5.0)
-"""Spacing of the grid of ring angles whose local minima of the distance to a target seed
-the iterations. [rad]"""
+"""Spacing of the grid of ring angles whose interpolated map starts Newton (and whose
+local minima of the distance to a target seed the search). [rad]"""
 SEEDS = 6
 MAX_SEEDS = 24
 """Grid seeds per target: the SEEDS closest local minima, and more (up to MAX_SEEDS) where
@@ -91,6 +90,18 @@ MAX_ITERATIONS = 80
 """Levenberg-Marquardt iterations per seed at most."""
 MAX_DAMPING = 1e8
 """Damping beyond which no step lowers the distance: the closest point is found."""
+
+NEWTON_ITERATIONS = 12
+"""Newton iterations on (state, angles) per seed at most (from an interpolated start they
+converge in three to five)."""
+CONVERGED = 1e-12
+"""Newton on (state, angles) has converged where every residual (the model's, m or rad,
+and the tip's distance to the target, m) is below this."""
+EDGE = 1e-9
+"""A target on a grid triangle's edge (barycentric coordinate down to -EDGE) is in it."""
+FOLD_BAND = 4.0
+"""Safety factor on the estimated reach of the map beyond a folded grid triangle's image
+(where a target's solutions may lie between the grid's points)."""
 
 
 @dataclass(frozen=True)
@@ -336,19 +347,6 @@ def _fold_margin(
     return out
 
 
-NEWTON_ITERATIONS = 12
-"""Newton iterations on (state, angles) per seed at most (from an interpolated start they
-converge in three to five)."""
-CONVERGED = 1e-12
-"""Newton on (state, angles) has converged where every residual (the model's, m or rad,
-and the tip's distance to the target, m) is below this."""
-EDGE = 1e-9
-"""A target on a grid triangle's edge (barycentric coordinate down to -EDGE) is in it."""
-FOLD_BAND = 4.0
-"""Safety factor on the estimated reach of the map beyond a folded grid triangle's image
-(where a target's solutions may lie between the grid's points)."""
-
-
 @dataclass(frozen=True)
 class _Grid:
     """The state on the periodic grid of ring angles ``step`` apart, G per ring, theta1
@@ -389,7 +387,7 @@ def _solved_grid(model: RingPairModel, params_bytes: bytes, step: float) -> _Gri
     tip, jac, _ = _sensitivities(model, params, eq, theta)
     lag = eq.unknowns.copy()
     if model.n_unknowns > model.n_rod:  # the rings' angles at the tip (torsion)
-        lag[:, model.n_rod :] -= theta.T
+        lag[:, model.n_rod :] = np.mod(lag[:, model.n_rod :] - theta.T + np.pi, 2 * np.pi) - np.pi
     grid = _Grid(float(angles[1] - angles[0]), tip.T, jac, lag, eq.snapped.copy())
     for a in (grid.tip, grid.jac, grid.lag, grid.snapped):
         a.setflags(write=False)  # shared by every later call
@@ -412,6 +410,43 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
 
 
+def _in_boxes(
+    low: np.ndarray, high: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every (box, point) with the point (P, 2) in the box from ``low`` to ``high`` (B, 2),
+    found through square bins of half a box's size: (box index, point index). [m]"""
+    extent = (high - low).max(axis=1)
+    extent = extent[np.isfinite(extent)]
+    if extent.size == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    origin, top = points.min(axis=0), points.max(axis=0)
+    side = max(float(np.median(extent)) / 2, float((top - origin).max()) / 256, 1e-12)
+    shape = np.floor((top - origin) / side).astype(np.int64) + 1
+    cells = np.floor((points - origin) / side).astype(np.int64)
+    key = cells[:, 0] * shape[1] + cells[:, 1]
+    order = np.argsort(key, kind="stable")
+    bounds = np.searchsorted(key[order], np.arange(shape[0] * shape[1] + 1))
+    with np.errstate(invalid="ignore"):
+        first = np.floor((low - origin) / side)
+        last = np.floor((high - origin) / side)
+    hit = np.isfinite(first).all(axis=1) & (last >= 0).all(axis=1) & (first < shape).all(axis=1)
+    box = np.flatnonzero(hit)
+    first = np.maximum(first[box], 0).astype(np.int64)
+    last = np.minimum(last[box], shape - 1).astype(np.int64)
+    span = last - first + 1
+    # Each box's bins, then each bin's points.
+    count = span[:, 0] * span[:, 1]
+    rep = np.repeat(np.arange(box.size), count)
+    k = np.arange(rep.size) - np.repeat(np.cumsum(count) - count, count)
+    bins = (first[rep, 0] + k // span[rep, 1]) * shape[1] + first[rep, 1] + k % span[rep, 1]
+    count = bounds[bins + 1] - bounds[bins]
+    rep = np.repeat(rep, count)
+    k = np.arange(rep.size) - np.repeat(np.cumsum(count) - count, count)
+    point = order[np.repeat(bounds[bins], count) + k]
+    inside = ((points[point] >= low[box[rep]]) & (points[point] <= high[box[rep]])).all(axis=1)
+    return box[rep[inside]], point[inside]
+
+
 def _interpolated_seeds(
     grid: _Grid, targets: np.ndarray, n_rod: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -430,32 +465,22 @@ def _interpolated_seeds(
     det = (j[:, 0, 0] * j[:, 1, 1] - j[:, 0, 1] * j[:, 1, 0])[vertices]
     has = np.isfinite(corners).all(axis=(1, 2)) & np.isfinite(det).all(axis=1)
     fold = has & ~((det > 0).all(axis=1) | (det < 0).all(axis=1))
-    # Each triangle's centre and reach (the corners with a state).
-    known = np.isfinite(corners).all(axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        centre = np.where(known[..., None], corners, 0).sum(axis=1) / known.sum(axis=1)[:, None]
-        spread = np.linalg.norm(corners - centre[:, None], axis=2)
-    radius = np.where(known, spread, 0.0).max(axis=1)
     # The linear interpolation's error along each edge (a, b): |(J(b) - J(a)) (b - a)| / 8.
     jac = grid.jac[vertices]  # (T, 3, 2, 2)
     edge = np.diff(offsets[:, [0, 1, 2, 0]], axis=1) * grid.step  # (T, 3, 2)
     bend = np.einsum("tkij,tkj->tki", np.diff(jac[:, [0, 1, 2, 0]], axis=1), edge)
     band = np.where(fold, FOLD_BAND * np.linalg.norm(bend, axis=2).max(axis=1) / 8, 0.0)
-    tree = cKDTree(targets)
+    # Each triangle's bounding box (corners without a state left out; NaN if all are).
+    low, high = np.fmin.reduce(corners, axis=1), np.fmax.reduce(corners, axis=1)
     doubtful = np.zeros(len(targets), bool)
-    odd = np.flatnonzero(np.isfinite(centre).all(axis=1) & (~has | grid.snapped[vertices].any(1)))
-    if odd.size:
-        near = tree.query_ball_point(centre[odd], 2 * radius[odd], return_sorted=False)
-        doubtful[[k for h in near for k in h]] = True
+    odd = np.flatnonzero(np.isfinite(low).all(axis=1) & (~has | grid.snapped[vertices].any(1)))
+    if odd.size:  # twice the triangle's size about it
+        size = (high - low)[odd]
+        doubtful[_in_boxes(low[odd] - size, high[odd] + size, targets)[1]] = True
     cand = np.flatnonzero(has)
-    hits = tree.query_ball_point(centre[cand], radius[cand] * (1 + EDGE) + band[cand])
-    counts = np.fromiter((len(h) for h in hits), int, len(hits))
-    tri = np.repeat(cand, counts)
-    owner = np.fromiter((k for h in hits for k in h), int, int(counts.sum()))
-    reach = (band + EDGE * radius)[tri, None]
-    box = (targets[owner] >= corners.min(axis=1)[tri] - reach).all(axis=1)
-    box &= (targets[owner] <= corners.max(axis=1)[tri] + reach).all(axis=1)
-    tri, owner = tri[box], owner[box]
+    reach = (band + EDGE * (high - low).max(axis=1))[cand, None]
+    tri, owner = _in_boxes(low[cand] - reach, high[cand] + reach, targets)
+    tri = cand[tri]
     a, b, c = (corners[tri, k] for k in range(3))
     p = targets[owner]
     area = _cross(b - a, c - a)
@@ -547,17 +572,32 @@ def _newton(
         # Columns of one target in the same MERGE cell, with the same orientation, are one.
         cell = np.round(np.mod(theta[:, a], 2 * np.pi) / MERGE).astype(np.int64)
         keys = np.vstack([owner[a], cell, np.sign(det[a]).astype(np.int64)])
-        _, first, group = np.unique(keys, axis=1, return_index=True, return_inverse=True)
-        into[a] = a[first[group.ravel()]]
+        into[a] = a[_groups(keys)]
         a = a[into[a] == a]
     det[~converged] = np.nan
+    while (into[into] != into).any():  # through columns that merged later, to the last
+        into = into[into]
     return np.mod(theta, 2 * np.pi), converged, det, into, x
+
+
+def _groups(keys: np.ndarray) -> np.ndarray:
+    """For each column of the integer keys (k, P), the first column with the same keys."""
+    order = np.lexsort(keys[::-1])
+    new = np.ones(order.size, bool)
+    new[1:] = (np.diff(keys[:, order], axis=1) != 0).any(axis=0)
+    first = np.minimum.reduceat(order, np.flatnonzero(new)) if order.size else order
+    out = np.empty_like(order)
+    out[order] = first[np.cumsum(new) - 1]
+    return out
 
 
 def _distinct_columns(owner: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Indices of the first of each group of columns of theta (2, P) of the same owner
     whose angles agree to SAME_ANGLE, ordered by owner."""
-    order = np.argsort(owner, kind="stable")
+    # Columns in the same cell of SAME_ANGLE / 10 are one: few are left to compare in pairs.
+    cell = np.round(np.mod(theta, 2 * np.pi) / (SAME_ANGLE / 10)).astype(np.int64)
+    first = np.unique(_groups(np.vstack([owner, cell])))
+    order = first[np.argsort(owner[first], kind="stable")]
     owner, theta = owner[order], theta[:, order]
     start = np.searchsorted(owner, owner)  # each column's position in its owner's group
     rank = np.arange(owner.size) - start
