@@ -78,6 +78,7 @@ def score(result: Diagnosis, case: Planted, seconds: float) -> dict[str, object]
         "recovery": recovery(result, case),
         "seconds": seconds,
         "unexplained": result.unexplained,
+        "verdicts": {k: c.verdict for k, c in result.candidates.items()},
     }
 
 
@@ -137,7 +138,8 @@ def main() -> None:
     rows: dict[str, list[dict]] = {}
     with Progress(console=console) as bar:
         task = bar.add_task("diagnosing", total=len(sets) * args.random)
-        for i, planted in enumerate(sets):
+        for planted in sets:
+            i = PLANTED_SETS.index(planted)  # the same seeds with or without --only
             for j in range(args.random):
                 rng = np.random.default_rng([args.seed, i, j])
                 label = "+".join(sorted(planted)) or "null"
