@@ -5,7 +5,9 @@ model), so every one is reachable. Solved two ways:
 
 - ringpair (:func:`design.steering.steer`): all targets in one batch, Newton on the state
   and the angles together from the 5-deg grid's interpolated map (the grid solved inside
-  the timing); every distinct solution of each target;
+  the timing); every distinct solution of each target, each solved again on its own by
+  the load ramp (the check that it lands), with its flags (multistable: a search for
+  other stable states) and fold margin;
 - the named baseline: ``scipy.optimize.least_squares`` per target on the same forward map
   (the state by :func:`design.equilibrium.solve_equilibria`, one configuration per call,
   finite-difference Jacobian), started from the closest tip on the same 5-deg grid of ring

@@ -526,16 +526,22 @@ def _newton(
     where: np.ndarray,
     iterations: int = 2 * MAX_CORRECTIONS,
     exact: bool = False,
+    known: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Newton from x at load factors lam (no contraction required): (states, converged,
     acceptable as :func:`_judge` judges, ``exact`` passed on; checks of full-load states
-    go to ``checks`` at columns ``where``)."""
+    go to ``checks`` at columns ``where``). A column whose iterate comes within DISTINCT of
+    its ``known`` state (n, m), a regular root, stops unconverged: it would end there."""
     kern = kernels(model)
     xs = x.copy()
     ok = np.zeros(lam.size, bool)
     done = np.zeros(lam.size, bool)
     running = np.isfinite(xs).all(axis=0)
     for _ in range(iterations):
+        if known is not None:
+            a = np.flatnonzero(running)
+            near = _norm(xs[:, a] - known[:, a], _scale(model, _columns(params, a), a.size))
+            running[a[near <= DISTINCT]] = False
         a = np.flatnonzero(running)
         if a.size == 0:
             break
@@ -995,7 +1001,9 @@ def _other_stable_states(
         p, c, ones = _columns(params, todo), command[:, todo], np.ones(todo.size)
         scratch = _Checks(todo.size)
         local = np.arange(todo.size)
-        states, converged, good = _newton(model, p, c, start[:, todo], ones, scratch, local)
+        states, converged, good = _newton(
+            model, p, c, start[:, todo], ones, scratch, local, known=x[:, todo]
+        )
         unstable = np.flatnonzero(converged & ~good)
         if unstable.size:
             fallen, ok, _ = _fall(
