@@ -15,7 +15,8 @@ Stages (each a function of the study and earlier stages' results, timed, cached 
    parallel-ring loop);
 6. ``effects``: how far each model effect moves the chosen design's tip;
 7. ``cad``: parts, checks and renders of the chosen design (:func:`cad.build_parts`);
-8. ``diagnosis``: of measured data, when given.
+0. ``diagnosis``: of measured data, when given; it runs first, and every later stage
+   designs with its calibrated model, the robot as built (:func:`calibrated_study`).
 
 Besides each stage's files the run writes the hand-off: ``best_design.toml`` (the
 recommended design as a design file, read back by ``ringpair simulate`` and
@@ -142,6 +143,8 @@ class Run:
     seconds: dict[str, float] = field(default_factory=dict)
     reused: dict[str, bool] = field(default_factory=dict)
     handoff: list[Path] = field(default_factory=list)
+    calibration: dict[str, Any] | None = None
+    """With measured data: what the study took from its diagnosis (:func:`calibrated_study`)."""
 
 
 def _key(*parts: object) -> str:
@@ -361,8 +364,14 @@ def run_study(
 
     w = watch or _Unwatched()
     run = Run(out, study)
+    key: tuple[Any, ...] = (study_text,)
+    if data is not None:  # the robot as built: design with the calibrated model
+        key = (*key, _tree_hash(data))
+        what = "diagnosis of the measured data (the model the study designs with)"
+        diagnosis = _stage(run, "diagnosis", what, key, lambda: _diagnose(data), w)
+        study, run.calibration = calibrated_study(study, diagnosis["calibration"])
+        run.study = study
     model = RingPairModel(study.effects)
-    key = (study_text,)
     what = "workspace of the starting design"
     _stage(run, "baseline", what, key, lambda: sweep_workspace(study.base, model=model), w)
     what = "optimisation (IPOPT, multi-start)"
@@ -426,16 +435,45 @@ def run_study(
         w,
     )
     run.handoff.append(out / "cad" / "parts.csv")
-    if data is not None:
-        _stage(
-            run,
-            "diagnosis",
-            "diagnosis of the measured data",
-            (*key, _tree_hash(data)),
-            lambda: _diagnose(data),
-            w,
-        )
     return run
+
+
+CARRIED = (
+    "bending_rigidity_scale",
+    "wire_torsion_scale",
+    "catheter_torsion_scale",
+    "magnet_remanence",
+    "external_remanence",
+    "tip_mass",
+)
+"""Calibrated parameters that carry over from the bench robot to the designs of a study:
+properties of the tubes' material, the magnets and the tip as built (not of the bench's
+geometry, such as where its external magnet stood)."""
+
+
+def calibrated_study(study: Study, calibration: dict[str, Any]) -> tuple[Study, dict[str, Any]]:
+    """The study with the robot as built: the diagnosed model's effects added to the
+    study's (those a study can use: hysteresis needs ordered paths), the calibrated values
+    of :data:`CARRIED` set on its base design (the tip's mass, the magnets' remanence) or,
+    for the model's stiffness factors, which a design file does not hold, on every
+    candidate's parameters (:attr:`Study.calibration`). Returns (that study, what was
+    taken: effects, values by name [SI], effects left out)."""
+    from design.registry import design_with
+    from optimize.sizing.studyfile import STUDY_EFFECTS
+
+    diagnosed = frozenset(calibration["effects"])
+    usable = frozenset(e for e in diagnosed if e in STUDY_EFFECTS)
+    values = {k: float(v) for k, v in calibration["estimate"].items() if k in CARRIED}
+    held = {k: v for k, v in values.items() if PARAMETERS[k].field is not None}
+    factors = tuple((k, v) for k, v in values.items() if k not in held)
+    taken = {"effects": sorted(usable), "values": values, "left_out": sorted(diagnosed - usable)}
+    calibrated = replace(
+        study,
+        effects=study.effects | usable,
+        base=design_with(study.base, held),
+        calibration=study.calibration + factors,
+    )
+    return calibrated, taken
 
 
 def _tip_note(design: Design, process: str) -> str:
@@ -481,11 +519,19 @@ def _tree_hash(path: Path) -> str:
 
 
 def _diagnose(data: Path) -> dict[str, Any]:
+    """The diagnosis JSON of the data set (docs/formats.md), and under ``calibration`` its
+    final model's effects and estimates by parameter name [SI]."""
     from optimize.fitting.diagnose import diagnose
     from optimize.fitting.measurements import load_dataset
 
     design, m = load_dataset(data)
-    return diagnose(design, m).to_json()
+    result = diagnose(design, m)
+    out = result.to_json()
+    out["calibration"] = {
+        "effects": sorted(result.final.effects),
+        "estimate": dict(result.final.calibration.estimate),
+    }
+    return out
 
 
 def write_manifest(

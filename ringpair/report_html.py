@@ -25,6 +25,7 @@ import numpy as np
 
 from design.atomic import atomic_path, write_text
 from design.model import DEFAULT_EFFECTS, RingPairModel
+from design.registry import file_key, file_unit
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
 from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run
@@ -234,10 +235,31 @@ def _question(run: Run, doc: dict[str, Any]) -> str:
         f"large as possible, for a robot of free length {_mm(base.robot.free_length)} mm "
         f"steered by a {ext.shape} magnet Ø{_mm(ext.diameter)} × {_mm(ext.length)} mm "
         f"({ext.remanence:.3g} T), its centre {start_d:.2f} mm from the rest tip in the start "
-        f"design? Model of the study: <b>{html.escape(doc['model'])}</b>.</p>"
+        f"design? Model of the study: <b>{html.escape(doc['model'])}</b>"
+        f"{_calibration_words(run)}.</p>"
         f"<ul class=setup><li><b>Free</b> (bounds): {html.escape('; '.join(free + mats))}</li>"
         f"<li><b>Limits</b>: {html.escape('; '.join(limits))}</li></ul>"
     )
+
+
+def _calibration_words(run: Run) -> str:
+    """With measured data: that the study designed with the robot as built, and how."""
+    cal = run.calibration
+    if not cal:
+        return ""
+    values = "; ".join(
+        f"{file_key(name)} {value / file_unit(name)[1]:.4g}"
+        for name, value in cal["values"].items()
+    )
+    out = (
+        ", calibrated on the measured data (the robot as built: the diagnosis's effects "
+        f"{html.escape(', '.join(cal['effects']) or 'none')}"
+        + (f", and {html.escape(values)} on the start design" if values else "")
+        + ")"
+    )
+    if cal["left_out"]:
+        out += f"; left out of the optimisation: {html.escape(', '.join(cal['left_out']))}"
+    return out
 
 
 def _answer(run: Run, doc: dict[str, Any]) -> str:

@@ -24,13 +24,14 @@ from design.equilibrium import drive, solve_equilibria
 from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
 from design.records import Design
-from design.registry import NAMES, parameter_vector
+from design.registry import NAMES
 from optimize.sizing.materials import Material, material
 from optimize.sizing.nlp_designs import (
     candidate_design,
     free_values,
     group_bounds,
     material_combinations,
+    study_parameters,
 )
 from optimize.sizing.nlp_problem import (
     GROUPS,
@@ -188,7 +189,7 @@ def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
     """Forward equilibria of ``design`` at the study's configurations: (core, v, X, eq)."""
     c = core(_nlp_shape(study))
-    p = parameter_vector(design)
+    p = study_parameters(study, design)
     eq = solve_equilibria(c.model, c.configuration_params(p), c.commands[0], c.commands[1])
     return c, free_values(study, design), eq.unknowns.T.copy(), eq
 
@@ -199,7 +200,7 @@ def _norms(study: Study) -> _Norms:
     design = candidate_design(study, free_values(study, study.base), cat, wire)
     c, v, x, _ = _forward(study, design)
     x = np.nan_to_num(x)
-    _, m, _, _, _ = c.evaluate(v, x, parameter_vector(design), 1.0)
+    _, m, _, _, _ = c.evaluate(v, x, study_parameters(study, design), 1.0)
     metrics = _metrics_dict(m)
     deflection = metrics["max_deflection"] if metrics["max_deflection"] > 0 else 1e-3
     disc = metrics["disc_radius"] if metrics["disc_radius"] > 1e-6 * deflection else deflection
@@ -224,7 +225,8 @@ def evaluate_design(
     c, v, x, eq = _forward(study, design)
     converged = bool(eq.converged.all())
     norms = _norms(study)
-    g, m, _, _, _ = c.evaluate(v, np.nan_to_num(x), parameter_vector(design), norms.deflection)
+    p = study_parameters(study, design)
+    g, m, _, _, _ = c.evaluate(v, np.nan_to_num(x), p, norms.deflection)
     g, metrics = np.asarray(g).ravel(), _metrics_dict(m)
     bounds = group_bounds(study, cat, wire, epsilon)
     states = _states(c, g, bounds)
@@ -294,7 +296,7 @@ def _parameters(
     """(NLP parameter vector, warm-start z, warm-start x~ (n, K'), area sign)."""
     c = core(_nlp_shape(study))
     design = candidate_design(study, start, cat, wire)
-    p = parameter_vector(design)
+    p = study_parameters(study, design)
     _, _, x, _ = _forward(study, design)
     x = np.nan_to_num(x)
     n = c.model.n_unknowns

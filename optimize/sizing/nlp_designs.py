@@ -31,6 +31,15 @@ def free_values(study: Study, design: Design) -> np.ndarray:
     return np.array(out)
 
 
+def study_parameters(study: Study, design: Design) -> np.ndarray:
+    """The model parameter vector of ``design`` in ``study``: its own, with the study's
+    calibrated factors (:attr:`Study.calibration`) set. [SI]"""
+    p = parameter_vector(design)
+    for name, value in study.calibration:
+        p[index(name)] = value
+    return p
+
+
 def candidate_design(
     study: Study,
     values: Mapping[str, float] | np.ndarray,

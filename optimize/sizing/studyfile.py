@@ -241,6 +241,10 @@ class Study:
     pareto: tuple[ParetoSweep, ...] = ()
     description: str = ""
     base_source: str = "embedded"
+    calibration: tuple[tuple[str, float], ...] = ()
+    """Model factors calibrated on bench data (``ringpair study --data``), set on every
+    candidate design's parameter vector: (name, value) pairs of factors a design file does
+    not hold (e.g. ``bending_rigidity_scale``). [SI]"""
 
     @property
     def limits(self) -> Constraints:
