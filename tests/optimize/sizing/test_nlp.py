@@ -173,8 +173,11 @@ def test_pareto_values_span_the_free_bounds():
     od, dist, vol = (pareto_values(study, p) for p in study.pareto)
     assert od[0] == pytest.approx(1.2e-3) and od[-1] == pytest.approx(2.5e-3)
     assert dist[0] == pytest.approx(0.060) and dist[-1] == pytest.approx(0.200)
-    # Both rings, 4 mm OD, 0.5 mm bore, 3 mm long at most. [m^3]
-    assert vol[-1] == pytest.approx(2 * math.pi / 4 * (4e-3**2 - 0.5e-3**2) * 3e-3)
+    # Both rings at the largest OD, the smallest bore and the longest length. [m^3]
+    od_hi = study.bound("magnet_outer_diameter").high
+    bore_lo = study.bound("magnet_inner_diameter").low
+    length_hi = study.bound("magnet_length").high
+    assert vol[-1] == pytest.approx(2 * math.pi / 4 * (od_hi**2 - bore_lo**2) * length_hi)
     assert len(od) == study.pareto[0].points
 
 
