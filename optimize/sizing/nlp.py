@@ -20,11 +20,13 @@ from typing import Any
 
 import numpy as np
 
+from design.controllable import controllable_workspace
 from design.equilibrium import drive, solve_equilibria
-from design.geometry import ring_clears_wire
+from design.geometry import rest_position, ring_clears_wire
 from design.magnets import ring_volume
 from design.records import Design
 from design.registry import NAMES
+from design.workspace import angle_grid
 from optimize.sizing.materials import Material, material
 from optimize.sizing.nlp_designs import (
     candidate_design,
@@ -135,7 +137,9 @@ def _metrics_dict(m: np.ndarray) -> dict[str, float]:
 
 def _objective(study: Study, metrics: Mapping[str, float], norms: _Norms) -> float:
     if len(study.objective) == 1:
-        return float(metrics[study.objective[0][0]])
+        name = study.objective[0][0]
+        # the NLP's own measure until the controllable disc is computed (optimize_design)
+        return float(metrics[name] if name in metrics else metrics["disc_radius"])
     div = {"disc_radius": norms.disc, "area": norms.area, "reach_ratio": 1.0}
     return float(sum(w * metrics[n] / div[n] for n, w in study.objective))
 
@@ -186,6 +190,26 @@ def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
     return ""
 
 
+CONTROLLABLE = "controllable_disc_radius"
+"""The objective option: the disc about the rest position the robot can be steered over
+from rest without a snap (:func:`controllable_disc_radius`)."""
+CONTROLLABLE_STEP = np.deg2rad(10.0)
+"""Grid step of the ring angles for the controllable workspace. [rad]"""
+
+
+def controllable_disc_radius(study: Study, design: Design) -> float:
+    """The radius of the disc about the rest position that the robot of ``design`` can be
+    steered over from rest without a snap (:func:`design.controllable.controllable_workspace`
+    on a CONTROLLABLE_STEP grid, the study's model). [m]"""
+    model = core(_nlp_shape(study)).model
+    p = study_parameters(study, design)
+    angles = angle_grid(CONTROLLABLE_STEP)
+    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
+    grid = solve_equilibria(model, p, t1.ravel(), t2.ravel())
+    rest = rest_position(design.robot.free_length)
+    return controllable_workspace(model, p, grid, angles, rest).disc_radius
+
+
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
     """Forward equilibria of ``design`` at the study's configurations: (core, v, X, eq)."""
     c = core(_nlp_shape(study))
@@ -228,6 +252,8 @@ def evaluate_design(
     p = study_parameters(study, design)
     g, m, _, _, _ = c.evaluate(v, np.nan_to_num(x), p, norms.deflection)
     g, metrics = np.asarray(g).ravel(), _metrics_dict(m)
+    if any(name == CONTROLLABLE for name, _ in study.objective):
+        metrics[CONTROLLABLE] = controllable_disc_radius(study, design)
     bounds = group_bounds(study, cat, wire, epsilon)
     states = _states(c, g, bounds)
     violation = _violation(states)
@@ -309,7 +335,8 @@ def _parameters(
     hi = np.array([b.high for b in study.free])
     z0 = np.where(hi > lo, (start - lo) / np.where(hi > lo, hi - lo, 1.0), 0.0)
     weights = dict(study.objective)
-    w = [weights.get("disc_radius", 0.0), weights.get("area", 0.0), weights.get("reach_ratio", 0.0)]
+    disc = weights.get("disc_radius", 0.0) + weights.get(CONTROLLABLE, 0.0)
+    w = [disc, weights.get("area", 0.0), weights.get("reach_ratio", 0.0)]
     params = np.concatenate(
         [p, xs, lo, hi, [norms.disc, norms.area, 1.0], [sign], w, [norms.deflection]]
     )
@@ -557,6 +584,18 @@ def optimize_design(
                     )
                 )
     accepted = [a for a in attempts if a.start.accepted]
+    if any(name == CONTROLLABLE for name, _ in study.objective):
+        for a in accepted:  # the objective: the disc the robot can be steered over
+            assert a.v is not None
+            cat_name, wire_name = a.start.materials
+            design = candidate_design(
+                study,
+                a.v,
+                material(cat_name) if cat_name else None,
+                material(wire_name) if wire_name else None,
+            )
+            a.metrics[CONTROLLABLE] = controllable_disc_radius(study, design)
+            a.start = replace(a.start, objective=a.metrics[CONTROLLABLE])
     start_results = tuple(a.start for a in attempts)
     if not accepted:
         conflicts: tuple[Conflict, ...] = ()

@@ -151,7 +151,10 @@ FREE_KEYS: dict[str, FreeKey] = {
 }
 """Free quantities by file key."""
 
-OBJECTIVES = ("disc_radius", "area", "reach_ratio")
+OBJECTIVES = ("disc_radius", "area", "reach_ratio", "controllable_disc_radius")
+"""``controllable_disc_radius``: the NLP maximises the disc radius; among its accepted
+starts and materials the design whose controllable disc (steerable from rest without a
+snap, :mod:`design.controllable`) is largest wins; alone, not weighted with others."""
 PARETO_QUANTITIES = {
     # name: (range key, scale, sense of the epsilon constraint)
     "catheter_outer_diameter": ("range_mm", MM, "max"),
@@ -403,6 +406,11 @@ def _objective(value: Any) -> tuple[tuple[str, float], ...]:
         out.append((name, _number(f"objective.{name}", weight, 0.0, 1e6, "a weight")))
     if not any(w > 0 for _, w in out):
         raise StudyError(f"objective must have at least one weight > 0; got {value!r}")
+    if len(out) > 1 and any(n == "controllable_disc_radius" for n, _ in out):
+        raise StudyError(
+            "objective controllable_disc_radius stands alone (it is not weighted with "
+            f"others); got {value!r}"
+        )
     return tuple((n, w) for n, w in out if w > 0)
 
 

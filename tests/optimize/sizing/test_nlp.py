@@ -369,3 +369,26 @@ def test_torsion_study_optimum_holds_in_forward_simulation():
         eq = solve_design(result.design, t1, phi, model=model)
         lag = np.angle(np.exp(1j * (eq.tip_angles - eq.command)))
         assert np.abs(lag).max() <= study.limits.twist_limit * (1 + 1e-3)
+
+
+def test_controllable_objective_picks_the_start_with_the_largest_steerable_disc():
+    """objective = "controllable_disc_radius": every accepted start is scored by the disc
+    the robot can be steered over from rest without a snap, as ``ringpair workspace``
+    measures it (design.controllable on the study's model), and the best one wins."""
+    from design.controllable import controllable_workspace
+    from design.workspace import angle_grid
+
+    study = replace(loads_study(SMALL), objective=(("controllable_disc_radius", 1.0),), starts=3)
+    result = optimize_design(study)
+    assert result.feasible, result.report()
+    accepted = [s.objective for s in result.starts if s.accepted]
+    assert result.objective == max(accepted)
+    model = RingPairModel(study.effects)
+    angles = angle_grid(np.deg2rad(10.0))
+    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
+    p = model.parameters(result.design)
+    grid = solve_design(result.design, t1.ravel(), t2.ravel(), model)
+    rest = np.array([result.design.robot.free_length, 0.0, 0.0])
+    steerable = controllable_workspace(model, p, grid, angles, rest).disc_radius
+    assert result.metrics["controllable_disc_radius"] == pytest.approx(steerable, rel=1e-9)
+    assert result.objective == pytest.approx(steerable, rel=1e-9)

@@ -124,6 +124,11 @@ BAD = [
         ["effects", "'hysteresis'", "not usable in a study"],
     ),
     (
+        'name = "s"',
+        'name = "s"\nobjective = { controllable_disc_radius = 1.0, area = 1.0 }',
+        ["controllable_disc_radius stands alone"],
+    ),
+    (
         "[free]\n",
         "[free]\nstop_angle_deg = [10.0, 90.0]\n",
         ["free.stop_angle_deg", "torsion and printed_tip", "got effects none"],
