@@ -399,11 +399,13 @@ def run_study(
     _stage(
         run,
         "forward",
-        "forward re-simulation with the model for design work",
+        "forward re-simulation with the model for design work (and its controllable disc)",
         key,
         lambda: {
             "start": sweep_workspace(study.base, model=faithful),
             "best": sweep_workspace(chosen, model=faithful),
+            "start_controllable": steerable_disc(study.base, faithful),
+            "best_controllable": steerable_disc(chosen, faithful),
         },
         w,
     )
@@ -436,6 +438,23 @@ def run_study(
     )
     run.handoff.append(out / "cad" / "parts.csv")
     return run
+
+
+STEERABLE_STEP = np.deg2rad(10.0)
+"""Grid step of the ring angles for the controllable disc of the forward stage. [rad]"""
+
+
+def steerable_disc(design: Design, model: RingPairModel) -> float:
+    """The disc about the rest position the robot can be steered over from rest without a
+    snap (:func:`design.controllable.controllable_workspace`, STEERABLE_STEP grid). [m]"""
+    from design.controllable import controllable_workspace
+
+    angles = angle_grid(STEERABLE_STEP)
+    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
+    p = model.parameters(design)
+    grid = solve_equilibria(model, p, t1.ravel(), t2.ravel())
+    rest = rest_position(design.robot.free_length)
+    return controllable_workspace(model, p, grid, angles, rest).disc_radius
 
 
 CARRIED = (

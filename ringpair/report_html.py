@@ -187,6 +187,8 @@ def results(run: Run) -> dict[str, Any]:
             "model": work_model,
             "start_disc_radius_mm": start_ws.disc_radius / MM,
             "best_disc_radius_mm": best_ws.disc_radius / MM,
+            "start_controllable_disc_radius_mm": fwd["start_controllable"] / MM,
+            "best_controllable_disc_radius_mm": fwd["best_controllable"] / MM,
         },
         "tolerance": {
             "samples": int(len(tol)),
@@ -270,14 +272,16 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
     cards = [
         f'<div class="card main"><div class=big id=headline>{b:.2f} mm</div>'
         f"disc radius of the recommended design, {html.escape(doc['model'])} model (the "
-        f"study's)<br>start {s:.2f} mm: <b>{b - s:+.2f} mm ({100 * (b / s - 1):+.0f} %)</b></div>"
+        f"study's)<br>start {s:.2f} mm: <b>{b - s:+.2f} mm ({100 * (b / s - 1):+.0f} %)</b>"
+        + (_steerable(f) if f["model"] == doc["model"] else "")
+        + "</div>"
     ]
     if f["model"] != doc["model"]:
         fs, fb = f["start_disc_radius_mm"], f["best_disc_radius_mm"]
         cards.append(
             f"<div class=card><div class=big id=forward>{fb:.2f} mm</div>re-simulated with "
             f"the model for design work ({html.escape(f['model'])})<br>start {fs:.2f} mm: "
-            f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b></div>"
+            f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>{_steerable(f)}</div>"
         )
     d = run.results["optimise"].design
     cat, wire = doc["materials"]
@@ -295,6 +299,15 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
         f"(<code>parts.csv</code>).</div>"
     )
     return f"<div class=cards>{''.join(cards)}</div>"
+
+
+def _steerable(f: dict[str, Any]) -> str:
+    """The controllable disc under the model for design work, start and recommended."""
+    cs, cb = f["start_controllable_disc_radius_mm"], f["best_controllable_disc_radius_mm"]
+    return (
+        f"<br>steerable from rest without a snap (controllable disc): <b>{cb:.2f} mm</b> "
+        f"(start {cs:.2f} mm)"
+    )
 
 
 def _limits(doc: dict[str, Any]) -> str:

@@ -51,9 +51,14 @@ def test_every_stage_runs_and_the_report_shows_the_json_numbers(study_run):
         f"{doc['best']['disc_radius_mm']:.3f}",
         f"{doc['tolerance']['disc_radius_mean_mm']:.3f}",
         f"{doc['tolerance']['disc_radius_std_mm']:.3f}",
+        f"{doc['forward']['best_controllable_disc_radius_mm']:.2f} mm",
     ]
     for number in numbers:
         assert number in page, number
+    # the controllable disc (steerable from rest without a snap) cannot exceed the loop's
+    # disc by more than the 10-degree grid's rasterisation
+    f = doc["forward"]
+    assert 0 < f["best_controllable_disc_radius_mm"] <= 1.05 * f["best_disc_radius_mm"]
     assert doc["forward"]["best_disc_radius_mm"] > doc["forward"]["start_disc_radius_mm"]
     assert doc["tolerance"]["samples"] == 20 and doc["tolerance"]["disc_radius_std_mm"] > 0
     assert {r["effect"] for r in doc["effects"]} >= {"torsion", "near_field", "all"}
