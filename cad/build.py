@@ -19,6 +19,7 @@ import csv
 import io
 import json
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -46,6 +47,9 @@ from cad.selflocking import SelfLocking
 from design.atomic import write_text
 from design.records import Design
 from design.units import GRAM, MM3
+
+TIP_PIECES = ("mounting_piece_proximal", "mounting_piece_distal")
+"""The printed parts the model carries (:mod:`design.mounting`)."""
 
 STEP_FILE = "ringpair_robot.step"
 
@@ -164,7 +168,10 @@ def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
 
 
 def _parts_table(
-    assembly: RobotAssembly, process: PrintProcess, design: Design, meshes: dict[str, PartMesh]
+    assembly: RobotAssembly,
+    process_of: Callable[[str], PrintProcess],
+    design: Design,
+    meshes: dict[str, PartMesh],
 ) -> list[dict[str, object]]:
     """One dict per part: name, quantity, printed, material, volume_mm3 [mm^3], mass_g [g]
     (one piece, 4 significant digits; printed parts at the process material's density,
@@ -175,6 +182,7 @@ def _parts_table(
     for name, part in assembly.parts.items():
         size = np.ptp(np.asarray(meshes[name].vertices), axis=0)
         volume = part.solid.Volume()
+        process = process_of(name)
         printed = (f"{process.material}, {process.name} print", process.material_density_kg_m3)
         material, density = printed if part.printed else bought[name]
         rows.append(
@@ -216,6 +224,7 @@ def build_parts(
     actuator: ActuatorSpec | None = None,
     material_pair: str | None = None,
     render: bool = True,
+    tip_process: str | PrintProcess | None = None,
 ) -> CadReport:
     """Build, export, check and render every part of ``design``.
 
@@ -224,6 +233,9 @@ def build_parts(
     design : The robot (SI, as loaded from a design file).
     out_dir : Output directory (created); files in it are replaced atomically.
     process : ``"fdm"`` or ``"resin"``, or a :class:`~cad.process.PrintProcess`.
+    tip_process : the process of the two tip pieces (the parts the model carries, whose
+        fits and walls set their size and mass); None: ``process``. ``ringpair study``
+        passes the design's own ``tip.mounting.process``.
     mounting, actuator : Designer's choices for the tip pieces and the actuator.
     material_pair : Worm/wheel material pair for the self-locking check.
     render : Also write the PNG renders.
@@ -234,12 +246,13 @@ def build_parts(
         (a ValueError, :class:`~cad.errors.CadError`) for impossible dimensions.
     """
     proc = get_process(process)
+    tip = proc if tip_process is None else get_process(tip_process)
     out = Path(out_dir)
     report = CadReport(out_dir=out, process=proc.name)
     t0 = time.perf_counter()
 
     # All geometry first: impossible dimensions fail here, before anything is written.
-    pieces = build_mounting_pieces(design, proc, mounting)
+    pieces = build_mounting_pieces(design, tip, mounting)
     act = build_actuator(design, proc, actuator, material_pair)
     assembly = build_assembly(design, act, pieces)
     out.mkdir(parents=True, exist_ok=True)
@@ -250,15 +263,21 @@ def build_parts(
     stl_paths = {m.name: export_stl(m, out / "stl" / f"{m.name}.stl") for m in printed}
     report.files += list(stl_paths.values())
     report.files.append(export_step(assembly, out / STEP_FILE))
-    for k, plate in enumerate(arrange_plates(printed, proc), start=1):
-        report.files.append(export_3mf(meshes, plate, out / f"plate_{proc.name}_{k}.3mf"))
+
+    def process_of(name: str) -> PrintProcess:
+        return tip if name in TIP_PIECES else proc
+
+    for each in {p.name: p for p in (proc, tip)}.values():  # one set of plates per printer
+        mine = [m for m in printed if process_of(m.name).name == each.name]
+        for k, plate in enumerate(arrange_plates(mine, each), start=1):
+            report.files.append(export_3mf(meshes, plate, out / f"plate_{each.name}_{k}.3mf"))
     t2 = time.perf_counter()
 
     rows: list[CheckRow] = []
     read_back = {}
     for name, path in stl_paths.items():
         part_rows, mesh = part_checks(
-            name, path, assembly.parts[name].solid.Volume(), proc, act.teeth.get(name)
+            name, path, assembly.parts[name].solid.Volume(), process_of(name), act.teeth.get(name)
         )
         rows += part_rows
         read_back[name] = mesh
@@ -271,7 +290,7 @@ def build_parts(
     rows += gear_checks(assembly, interference)
     report.checks = rows_as_dicts(rows)
     report.files.append(write_csv(rows, out / "checks.csv"))
-    report.parts = _parts_table(assembly, proc, design, meshes)
+    report.parts = _parts_table(assembly, process_of, design, meshes)
     report.files.append(_write_parts_csv(report.parts, out / "parts.csv"))
     t3 = time.perf_counter()
 

@@ -433,7 +433,15 @@ def run_study(
         + ": parts, checks"
         + (", renders" if render else ""),
         (*key, cad_process, render),
-        lambda: _cad_summary(build_parts(chosen, out / "cad", cad_process, render=render)),
+        lambda: _cad_summary(
+            build_parts(
+                chosen,
+                out / "cad",
+                cad_process,
+                render=render,
+                tip_process=chosen.tip.mounting.process,
+            )
+        ),
         w,
     )
     run.handoff.append(out / "cad" / "parts.csv")
@@ -496,11 +504,12 @@ def calibrated_study(study: Study, calibration: dict[str, Any]) -> tuple[Study, 
 
 
 def _tip_note(design: Design, process: str) -> str:
-    """Where the CAD prints the tip pieces otherwise than the design file says, say so."""
+    """Where the tip pieces are printed otherwise than the other parts (always as the
+    design file says, the pieces the model carries), say so."""
     designed = design.tip.mounting.process
     if designed == process:
         return ""
-    return f" (the design's tip pieces are {designed}: tip.mounting.process)"
+    return f", tip pieces {designed} (the design's tip.mounting.process, as modelled)"
 
 
 def headline(run: Run) -> str:

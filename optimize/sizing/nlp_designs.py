@@ -119,6 +119,7 @@ def group_bounds(
         "ring_wall": (lim.min_wall, inf),
         "catheter_wall": (lim.min_wall, inf),
         "ring_diameter": (-inf, lim.max_outer_diameter),
+        "ring_seat": (lim.wire_clearance, inf),
         "catheter_diameter": (-inf, lim.max_outer_diameter),
         "epsilon.catheter_outer_diameter": (-inf, inf),
         "epsilon.external_distance": (-inf, inf),

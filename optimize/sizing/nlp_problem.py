@@ -108,6 +108,7 @@ GROUPS: dict[str, tuple[float, str, str]] = {
     "ring_wall": (MM, "mm", "radial wall of the rings"),
     "catheter_wall": (MM, "mm", "radial wall of the catheter"),
     "ring_diameter": (MM, "mm", "tip outer diameter (printed pieces with printed_tip)"),
+    "ring_seat": (MM, "mm", "ring bore minus the printed pieces' wire bore and passage"),
     "catheter_diameter": (MM, "mm", "catheter outer diameter"),
     "epsilon.catheter_outer_diameter": (MM, "mm", "catheter OD (Pareto bound)"),
     "epsilon.external_distance": (MM, "mm", "external magnet distance (Pareto bound)"),
@@ -271,6 +272,11 @@ def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
         ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
         ("ring_diameter", tip_diameter),
         ("catheter_diameter", s["catheter_outer_diameter"]),
+    ]
+    if printed:  # the rings rest on the pieces' pocket floors (cad.mounting checks it)
+        seat = s["magnet_inner_diameter"] - ca.fmax(s.tip.wire_bore, s["catheter_inner_diameter"])
+        rows.append(("ring_seat", seat))
+    rows += [
         ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
         ("epsilon.external_distance", distance),
         ("epsilon.magnet_volume", volume),

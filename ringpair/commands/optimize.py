@@ -90,6 +90,12 @@ def optimize(
             f"disc radius by forward simulation: start {start_ws.disc_radius / MM:.2f} mm, "
             f"best {end_ws.disc_radius / MM:.2f} mm"
         )
+        if "controllable_disc_radius" in best.metrics:
+            console.print(
+                "controllable disc (steerable from rest without a snap, the study's model): "
+                f"start {best.base_metrics['controllable_disc_radius'] / MM:.2f} mm, "
+                f"best {best.metrics['controllable_disc_radius'] / MM:.2f} mm"
+            )
     pareto = None
     if study.pareto and not no_pareto:
         pareto = _run_sweeps(study, out, scheduler, workers)

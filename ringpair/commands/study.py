@@ -129,8 +129,10 @@ def _process(name: str) -> str:
     "--process",
     default="fdm",
     show_default=True,
-    help="Print process of the parts: 'fdm' or 'resin' (fit allowances, clearances, "
-    "minimum wall, build volume, material).",
+    help="Print process of the actuator parts: 'fdm' or 'resin' (fit allowances, "
+    "clearances, minimum wall, build volume, material). The two tip pieces are printed as "
+    "the design says (tip.mounting.process, resin by default): they are the pieces the "
+    "model carries.",
 )
 @click.option("--no-render", is_flag=True, help="Skip the part renders (faster).")
 def study(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -50,3 +51,24 @@ def test_bad_study_file_is_one_message_and_exit_2(tmp_path, pareto_study):
     result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "magnet_gap_mm" in result.output
     assert "Traceback" not in result.output and not (tmp_path / "o").exists()
+
+
+def test_optimize_with_the_controllable_objective_says_the_steerable_disc(tmp_path):
+    """objective = "controllable_disc_radius" (issue 18): the console gives the disc the
+    robot can be steered over from rest without a snap, start and best, in mm, and the
+    best is the summary's objective."""
+    from studies import SMALL
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        SMALL.replace('objective = "disc_radius"', 'objective = "controllable_disc_radius"')
+    )
+    result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(tmp_path / "o")])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    pattern = r"steerable from rest without a snap.*?start ([\d.]+) mm, best ([\d.]+) mm"
+    match = re.search(pattern, text)
+    assert match, text
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    best = float(match.group(2))
+    assert best == pytest.approx(summary["objective"] * 1e3, abs=0.006)  # SI in the summary

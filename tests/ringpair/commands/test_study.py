@@ -200,11 +200,15 @@ def test_parts_list_names_material_mass_size_and_file(study_run):
     rows, _ = _rows(out / "cad" / "parts.csv")
     assert tuple(rows[0]) == PARTS_COLUMNS
     printed = [r for r in rows if r["printed"] == "True"]
-    assert printed and all(r["material"] == "PLA, fdm print" for r in printed)
+    # the tip pieces as the design (and the model) has them: resin; the rest --process fdm
+    tip = {"mounting_piece_proximal", "mounting_piece_distal"}
+    assert tip <= {r["part"] for r in printed}
     for r in printed:
+        process = RESIN if r["part"] in tip else FDM
+        assert r["material"] == f"{process.material}, {process.name} print", r["part"]
         mesh = load_stl(out / "cad" / r["file"])  # the file it names, read back
         assert mesh.volume == pytest.approx(float(r["volume_mm3"]), rel=0.01), r["part"]
-        mass = float(r["volume_mm3"]) * 1e-9 * FDM.material_density_kg_m3 * 1e3
+        mass = float(r["volume_mm3"]) * 1e-9 * process.material_density_kg_m3 * 1e3
         assert float(r["mass_g"]) == pytest.approx(mass, rel=1e-3), r["part"]
         size = sorted(float(r[f"size_{a}_mm"]) for a in "xyz")
         assert size == pytest.approx(sorted(np.ptp(mesh.vertices, axis=0)), abs=0.05), r["part"]
@@ -223,7 +227,7 @@ def test_console_says_each_stage_duration_what_the_parts_are_for_and_the_result(
         assert re.search(rf"^{stage}.*: \d+\.\d s$", text, re.M), stage
     assert "CAD of the recommended design (best_design.toml), fdm print" in text
     # the demonstrator's tip pieces are resin (tip.mounting.process): the console says so
-    assert "(the design's tip pieces are resin: tip.mounting.process)" in text
+    assert "fdm print, tip pieces resin (the design's tip.mounting.process, as modelled)" in text
     handoff = next(ln for ln in text.splitlines() if ln.startswith("hand-off: "))
     for name in ("best_design.toml", "pareto_external_distance.csv", "parts.csv"):
         assert name in handoff, name
