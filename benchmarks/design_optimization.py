@@ -49,7 +49,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=None, help="starts per material")
     args = parser.parse_args()
-    base_study = default_study()
+    base_study = replace(default_study(), effects=frozenset())
     if args.starts:
         base_study = replace(base_study, starts=args.starts)
     faithful_study = replace(base_study, effects=FAITHFUL)
