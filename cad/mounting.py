@@ -10,7 +10,7 @@ Each piece is built in its own frame: axis +Z pointing distally (towards the tip
 at its proximal face, angles measured about +Z from local +X, which is the ring's
 magnetisation direction at angle 0. In the robot's base frame the pieces sit with local
 Z along the tip tangent (+x) and local X along +y, so a piece angle is the magnet angle
-theta of ``spec/formats.md``.
+theta of ``docs/formats.md``.
 
 Proximal piece (on the catheter, turns the proximal ring, theta2)
     catheter socket with a glue reservoir ring and a radial fill port | wire passage

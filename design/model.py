@@ -4,7 +4,7 @@ tip pose) is built.
 
 Baseline (the paper's model, derived anew): point-dipole external field, linear cantilever
 under the tip wrench, transmissions rigid in torsion, no ring coupling, no gravity, no
-friction. Effects (spec/formats.md names), each reducing to the baseline in its limit:
+friction. Effects (docs/formats.md names), each reducing to the baseline in its limit:
 
 - ``near_field``: exact field of the axially magnetised cylinder (:mod:`design.cylinder_field`)
   instead of its point dipole.
@@ -62,7 +62,7 @@ from design.stops import commanded_angles, resting_angles, stop_stiffness, stop_
 from design.wrench import tip_wrench
 
 EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
-"""Model extensions by name (spec/formats.md): the causes a diagnosis can name."""
+"""Model extensions by name (docs/formats.md): the causes a diagnosis can name."""
 PRINTED_TIP = "printed_tip"
 """The tip as built (see the module's docstring): a switch of the model beside the effects,
 not among them, since it is known geometry of the design rather than a cause to find in
