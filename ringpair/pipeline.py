@@ -9,7 +9,8 @@ Stages (each a function of the study and earlier stages' results, timed, cached 
    NLP solved again with that one limit moved by :data:`RELAX`);
 3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sizing.pareto.run_sweeps`);
 4. ``forward``: the starting and the chosen design re-simulated with the model for design
-   work (:data:`design.model.DEFAULT_EFFECTS`);
+   work (:data:`design.model.DEFAULT_EFFECTS`, with the printed tip where the study has it:
+   :func:`forward_model`);
 5. ``tolerance``: Monte Carlo over manufacturing tolerances (:data:`TOLERANCES`), the
    spread of the chosen design's disc radius (one batch solve of every sample's
    parallel-ring loop);
@@ -47,7 +48,7 @@ from design.atomic import atomic_path, write_text
 from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
-from design.model import DEFAULT_EFFECTS, RingPairModel
+from design.model import DEFAULT_EFFECTS, PRINTED_TIP, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, file_key, index
 from design.units import MM
@@ -395,7 +396,7 @@ def run_study(
             w,
         )
         run.handoff += write_pareto_csvs(pareto, study, out / "pareto")
-    faithful = RingPairModel(DEFAULT_EFFECTS)
+    faithful = forward_model(study)
     _stage(
         run,
         "forward",
@@ -450,6 +451,12 @@ def run_study(
 
 STEERABLE_STEP = np.deg2rad(10.0)
 """Grid step of the ring angles for the controllable disc of the forward stage. [rad]"""
+
+
+def forward_model(study: Study) -> RingPairModel:
+    """The model the forward stage re-simulates with: the model for design work
+    (:data:`design.model.DEFAULT_EFFECTS`), with the printed tip where the study has it."""
+    return RingPairModel(DEFAULT_EFFECTS | (study.effects & {PRINTED_TIP}))
 
 
 def steerable_disc(design: Design, model: RingPairModel) -> float:
@@ -523,7 +530,8 @@ def headline(run: Run) -> str:
     parts = f"; parts for it in {Path(cad['out_dir'])} (list: parts.csv)" if cad is not None else ""
     return (
         f"Recommended design{made}: disc radius {best:.2f} mm with the model for design work "
-        f"({', '.join(sorted(DEFAULT_EFFECTS))}), against {start:.2f} mm for the starting "
+        f"({', '.join(sorted(forward_model(run.study).effects))}), against {start:.2f} mm "
+        "for the starting "
         f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
         f"Design file: {run.out / BEST_DESIGN}{parts}."
     )

@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 
 from design.atomic import atomic_path, write_text
-from design.model import DEFAULT_EFFECTS, RingPairModel
+from design.model import RingPairModel
 from design.registry import file_key, file_unit
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
-from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run
+from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run, forward_model
 from ringpair.plots import (
     binding,
     plot_fronts,
@@ -76,7 +76,7 @@ def _mm(x: float) -> str:
 def model_names(run: Run) -> tuple[str, str]:
     """The study's model and the model for design work, by name ('baseline' or the
     effects joined by '+')."""
-    return RingPairModel(run.study.effects).name, RingPairModel(DEFAULT_EFFECTS).name
+    return RingPairModel(run.study.effects).name, forward_model(run.study).name
 
 
 def front_notes(run: Run) -> dict[str, str]:
