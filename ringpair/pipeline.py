@@ -87,6 +87,7 @@ CONSTRAINT_LIMITS = {
     "catheter_wall": ("min_wall", -1),
     "ring_on_wire": ("wire_clearance", -1),
     "wire_in_catheter": ("wire_clearance", -1),
+    "ring_seat": ("wire_clearance", -1),
     "ring_diameter": ("max_outer_diameter", 1),
     "catheter_diameter": ("max_outer_diameter", 1),
     "strain.catheter": ("catheter_max_strain", 1),
