@@ -232,6 +232,17 @@ def _norms(study: Study) -> _Norms:
     return _Norms(disc, area, deflection, metrics)
 
 
+def start_breaks(study: Study) -> list[str]:
+    """The limits the study's base design breaks, each described (file units); empty when
+    it is feasible. A start whose disc beats the optimum's is not one the study allows."""
+    ev = evaluate_design(study, study.base)
+    return [
+        s.describe()
+        for s in ev.constraints
+        if -s.margin / s.scale > FEASIBILITY_TOLERANCE * (1 + abs(s.limit) / s.scale)
+    ]
+
+
 def evaluate_design(
     study: Study,
     design: Design,

@@ -60,7 +60,7 @@ def optimize(
     same study resumes. Exit 0 also for an infeasible study: the conflict report is
     printed and written to summary.json; exit 2 for a bad study file.
     """
-    from optimize.sizing.nlp import optimize_design
+    from optimize.sizing.nlp import optimize_design, start_breaks
     from ringpair.plots import plot_fronts, plot_workspaces
 
     study = study_from(study_path)
@@ -90,6 +90,9 @@ def optimize(
             f"disc radius by forward simulation: start {start_ws.disc_radius / MM:.2f} mm, "
             f"best {end_ws.disc_radius / MM:.2f} mm"
         )
+        broken = start_breaks(study)
+        if broken:
+            console.print("the starting design breaks the study's limits: " + "; ".join(broken))
         if "controllable_disc_radius" in best.metrics:
             console.print(
                 "controllable disc (steerable from rest without a snap, the study's model): "

@@ -66,6 +66,8 @@ def test_optimize_with_the_controllable_objective_says_the_steerable_disc(tmp_pa
     result = CliRunner().invoke(cli, ["optimize", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 0, result.output
     text = " ".join(result.output.split())
+    # the demonstrator (the start) twists its wire far past the 20-degree limit: said
+    assert "the starting design breaks the study's limits: twist.wire" in text, text
     pattern = r"steerable from rest without a snap.*?start ([\d.]+) mm, best ([\d.]+) mm"
     match = re.search(pattern, text)
     assert match, text
