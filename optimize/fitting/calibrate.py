@@ -16,9 +16,7 @@ the nominal design, with the widths of :data:`FREE_PARAMETERS`.
 Identifiability, said plainly: without gravity or torsion the baseline's tip pose
 depends on the external remanence and the bending rigidity only through their ratio, so
 ``bending_rigidity_scale`` and ``external_remanence`` cannot both be free without priors
-(their correlation is reported as +-1 and the fit says so in ``message``). Gravity
-separates them (the rod's own weight is a known load): with it the external remanence
-is freed by default (:data:`EFFECT_SEPARATES`).
+(their correlation is reported as +-1 and the fit says so in ``message``).
 
 The paper's method (an exhaustive grid over a stiffness scale and a field scale) is kept
 as :func:`grid_search_two_factors` (:mod:`optimize.fitting.paper_grid`, re-exported here). SI
@@ -62,7 +60,6 @@ from optimize.fitting.sensitivity import (
 __all__ = [
     "BASELINE_FREE",
     "EFFECT_FREE",
-    "EFFECT_SEPARATES",
     "FREE_PARAMETERS",
     "PAPER_FIELD_GRID",
     "PAPER_STIFFNESS_GRID",
@@ -133,20 +130,13 @@ EFFECT_FREE: dict[str, tuple[str, ...]] = {
     "large_deflection": (),
 }
 """Each effect's own parameters, freed with it by default."""
-EFFECT_SEPARATES: dict[str, tuple[str, ...]] = {"gravity": ("external_remanence",)}
-"""Parameters that are not the effect's own but that it makes separable, freed with it
-by default: under gravity the rod's own weight (a known load) fixes the scale of its
-compliance, so the strength of the field (external remanence, which also absorbs the
-tip magnets' remanence as built) is no longer bound to the bending rigidity."""
 
 
 def default_free(effects: Iterable[str] = ()) -> tuple[str, ...]:
-    """The baseline's free parameters plus each effect's own (in EFFECT_FREE order) and
-    those it makes separable (EFFECT_SEPARATES)."""
+    """The baseline's free parameters plus each effect's own (in EFFECT_FREE order)."""
     effects = set(effects)
     extra = [n for e, names in EFFECT_FREE.items() if e in effects for n in names]
-    extra += [n for e, names in EFFECT_SEPARATES.items() if e in effects for n in names]
-    return (*BASELINE_FREE, *dict.fromkeys(extra))
+    return (*BASELINE_FREE, *extra)
 
 
 def _check_free(free: Sequence[str]) -> tuple[str, ...]:
