@@ -170,9 +170,14 @@ def test_pareto_front_against_magnet_distance_is_monotone(known_study):
 
 def test_pareto_values_span_the_free_bounds():
     study = default_study()
-    od, dist, vol = (pareto_values(study, p) for p in study.pareto)
+    od, dist, vol = (pareto_values(study, replace(p, low=None, high=None)) for p in study.pareto)
     assert od[0] == pytest.approx(1.2e-3) and od[-1] == pytest.approx(2.5e-3)
     assert dist[0] == pytest.approx(0.060) and dist[-1] == pytest.approx(0.200)
+    # an explicit range (the default study's distance and volume sweeps) is taken as given
+    given = study.pareto[1]
+    assert given.low is not None and given.high is not None
+    span = pareto_values(study, given)
+    assert (span[0], span[-1]) == pytest.approx((given.low, given.high))
     # Both rings at the largest OD, the smallest bore and the longest length. [m^3]
     od_hi = study.bound("magnet_outer_diameter").high
     bore_lo = study.bound("magnet_inner_diameter").low
