@@ -1,6 +1,6 @@
 """Diagnosis: what the simulation gets wrong on measured data, the physical cause, and the gain.
 
-Method (the result format is spec/formats.md's diagnosis JSON):
+Method (the result format is docs/formats.md's diagnosis JSON):
 
 1. Calibrate the baseline (:func:`optimize.fitting.calibrate.calibrate`, its default free
    parameters) and cross-validate it over held-out configurations.

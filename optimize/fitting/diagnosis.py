@@ -1,5 +1,5 @@
 """What a diagnosis found: the fits, the causes, every candidate's verdict, as the
-diagnosis JSON of spec/formats.md (extended, nothing renamed; non-finite numbers are
+diagnosis JSON of docs/formats.md (extended, nothing renamed; non-finite numbers are
 null with their reason). The search itself is :mod:`optimize.fitting.diagnose`. SI units
 inside; the ``*_mm`` figures are millimetres.
 """
@@ -138,7 +138,7 @@ def finite_json(doc: object, path: str = "", nulls: dict[str, str] | None = None
 
 @dataclass(frozen=True)
 class Diagnosis:
-    """What the data say about the model (spec/formats.md, diagnosis result).
+    """What the data say about the model (docs/formats.md, diagnosis result).
 
     baseline, final : the calibrated baseline and the selected model.
     causes : accepted effects, in the order they were added (strongest first).
@@ -164,7 +164,7 @@ class Diagnosis:
     time_s: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
-        """The diagnosis JSON of spec/formats.md, with optional extra keys; non-finite
+        """The diagnosis JSON of docs/formats.md, with optional extra keys; non-finite
         numbers are null, each with its reason under ``null``."""
         base, final = self.baseline.summary(), self.final.summary()
         final["interval"] = {k: list(v) for c in self.causes for k, v in c.intervals.items()}

@@ -1,4 +1,4 @@
-"""Measured bench data (spec/formats.md): the CSV, the data-set folder, and their checks.
+"""Measured bench data (docs/formats.md): the CSV, the data-set folder, and their checks.
 
 A measurement is one commanded pair of ring angles with the tip position seen by the
 tracker (any of x, y, z; a top view gives x and y only), optionally the ring angles seen
@@ -144,7 +144,7 @@ def make_measurements(
 
 
 def load_measurements(path: str | os.PathLike[str]) -> Measurements:
-    """Read and check a measured-data CSV (spec/formats.md). [mm, deg] -> SI.
+    """Read and check a measured-data CSV (docs/formats.md). [mm, deg] -> SI.
 
     Raises :class:`MeasurementError` naming the file, line and column on any problem.
     """
@@ -351,7 +351,7 @@ def _check_duplicates(
 
 def load_dataset(folder: str | os.PathLike[str]) -> tuple[Design, Measurements]:
     """Read a data-set folder: ``design.toml`` (the set-up as built, nominal) and
-    ``measurements.csv`` (spec/formats.md). Design-file problems raise
+    ``measurements.csv`` (docs/formats.md). Design-file problems raise
     :class:`~design.designfile.DesignError`, data problems :class:`MeasurementError`."""
     f = Path(folder)
     if not f.exists():

@@ -48,7 +48,7 @@ from optimize.fitting.setups import FACE_MM, random_design
 from optimize.fitting.synth import VIEWS, Synthetic, synthesize_data
 
 PLANTABLE = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
-"""The effects the diagnosis names (spec/formats.md)."""
+"""The effects the diagnosis names (docs/formats.md)."""
 PLANTED_SETS: tuple[frozenset[str], ...] = (
     frozenset(),
     *(frozenset({e}) for e in PLANTABLE),

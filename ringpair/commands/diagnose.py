@@ -50,7 +50,7 @@ REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
 @path_option(
     "--json",
     "json_out",
-    help="Write the diagnosis JSON (spec/formats.md) here. " + OVERWRITE_POLICY,
+    help="Write the diagnosis JSON (docs/formats.md) here. " + OVERWRITE_POLICY,
 )
 @path_option("--report", help="Directory for residual plots before/after and diagnosis.html.")
 @click.option("--folds", default=5, show_default=True, help="Cross-validation folds.")
