@@ -30,8 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import label
 
-from design.equilibrium import Equilibria, drive
+from design.equilibrium import Equilibria, drive, solve_equilibria
+from design.geometry import rest_position
 from design.model import RingPairModel
+from design.workspace import angle_grid
 
 SAME = 1e-6
 """A driven state is a node's own when their unknowns agree to this, over their scale. [-]"""
@@ -164,6 +166,19 @@ def _covered_disc(position: np.ndarray, controllable: np.ndarray, rest: np.ndarr
     py, pz = np.meshgrid(centres, centres, indexing="ij")
     gap = np.hypot(py, pz)[outside]
     return float(max(gap.min() - pixel / np.sqrt(2), 0.0)) if gap.size else float(extent)
+
+
+def controllable_disc_radius(
+    model: RingPairModel, params: np.ndarray, free_length: float, step: float
+) -> float:
+    """The disc about the rest tip that the robot can be steered over from rest without a
+    snap: :func:`controllable_workspace` on a grid of ring angles of spacing ``step``
+    [rad], the rest tip the straight robot's of ``free_length`` [m]. [m]"""
+    angles = angle_grid(step)
+    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
+    grid = solve_equilibria(model, params, t1.ravel(), t2.ravel())
+    rest = rest_position(free_length)
+    return controllable_workspace(model, params, grid, angles, rest).disc_radius
 
 
 def _inside(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

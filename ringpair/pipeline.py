@@ -462,15 +462,11 @@ def forward_model(study: Study) -> RingPairModel:
 
 def steerable_disc(design: Design, model: RingPairModel) -> float:
     """The disc about the rest position the robot can be steered over from rest without a
-    snap (:func:`design.controllable.controllable_workspace`, STEERABLE_STEP grid). [m]"""
-    from design.controllable import controllable_workspace
+    snap (:func:`design.controllable.controllable_disc_radius`, STEERABLE_STEP grid). [m]"""
+    from design.controllable import controllable_disc_radius
 
-    angles = angle_grid(STEERABLE_STEP)
-    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
     p = model.parameters(design)
-    grid = solve_equilibria(model, p, t1.ravel(), t2.ravel())
-    rest = rest_position(design.robot.free_length)
-    return controllable_workspace(model, p, grid, angles, rest).disc_radius
+    return controllable_disc_radius(model, p, design.robot.free_length, STEERABLE_STEP)
 
 
 CARRIED = (

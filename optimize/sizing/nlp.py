@@ -20,13 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from design.controllable import controllable_workspace
+from design.controllable import controllable_disc_radius as controllable_disc
 from design.equilibrium import drive, solve_equilibria
-from design.geometry import rest_position, ring_clears_wire
+from design.geometry import ring_clears_wire
 from design.magnets import ring_volume
 from design.records import Design
 from design.registry import NAMES
-from design.workspace import angle_grid
 from optimize.sizing.materials import Material, material
 from optimize.sizing.nlp_designs import (
     candidate_design,
@@ -199,15 +198,11 @@ CONTROLLABLE_STEP = np.deg2rad(10.0)
 
 def controllable_disc_radius(study: Study, design: Design) -> float:
     """The radius of the disc about the rest position that the robot of ``design`` can be
-    steered over from rest without a snap (:func:`design.controllable.controllable_workspace`
+    steered over from rest without a snap (:func:`design.controllable.controllable_disc_radius`
     on a CONTROLLABLE_STEP grid, the study's model). [m]"""
     model = core(_nlp_shape(study)).model
     p = study_parameters(study, design)
-    angles = angle_grid(CONTROLLABLE_STEP)
-    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
-    grid = solve_equilibria(model, p, t1.ravel(), t2.ravel())
-    rest = rest_position(design.robot.free_length)
-    return controllable_workspace(model, p, grid, angles, rest).disc_radius
+    return controllable_disc(model, p, design.robot.free_length, CONTROLLABLE_STEP)
 
 
 def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
