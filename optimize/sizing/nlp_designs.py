@@ -15,6 +15,7 @@ from design.geometry import external_distance, magnet_centre_at
 from design.records import Design
 from design.registry import design_with, index, parameter_vector
 from optimize.sizing.materials import Material, material
+from optimize.sizing.nlp_problem import RING_STIFFNESS_MARGIN
 from optimize.sizing.studyfile import PARETO_QUANTITIES, Study
 
 
@@ -114,6 +115,7 @@ def group_bounds(
         "twist.catheter": (-lim.twist_limit, lim.twist_limit),
         "neutral": (-inf, lim.neutral_tolerance),
         "magnet_clearance": (lim.magnet_clearance, inf),
+        "ring_stiffness": (RING_STIFFNESS_MARGIN, inf),
         "ring_on_wire": (lim.wire_clearance, inf),
         "wire_in_catheter": (lim.wire_clearance, inf),
         "ring_wall": (lim.min_wall, inf),

@@ -68,6 +68,7 @@ from design.geometry import (
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.registry import NAMES, index
+from design.stops import stop_stiffness, stop_torque
 from optimize.sizing.studyfile import DEG, MM, MM3
 
 SMOOTH_MAX_SHARPNESS = 200.0
@@ -103,6 +104,7 @@ GROUPS: dict[str, tuple[float, str, str]] = {
     "twist.catheter": (DEG, "deg", "twist of the catheter (proximal ring)"),
     "neutral": (MM, "mm", "tip deflection with antiparallel rings"),
     "magnet_clearance": (MM, "mm", "rings to the external magnet's surface"),
+    "ring_stiffness": (1.0, "-", "rings' rotational stiffness over the transmissions'"),
     "ring_on_wire": (MM, "mm", "ring bore minus wire OD"),
     "wire_in_catheter": (MM, "mm", "catheter bore minus wire OD"),
     "ring_wall": (MM, "mm", "radial wall of the rings"),
@@ -221,11 +223,59 @@ COLUMN_ROWS = (
     "magnet_clearance",
 )
 """Constraint rows of one configuration: bending strain at the clamp, then at the rod's
-end, the transmissions' twist, the rings' clearance to the external magnet."""
+end, the transmissions' twist, the rings' clearance to the external magnet (with
+``torsion`` then ``ring_stiffness``, :func:`ring_stiffness`)."""
+
+RING_STIFFNESS_MARGIN = 0.05
+"""Least rotational stiffness of the rings at a sampled state, over the transmissions'
+(``ring_stiffness`` rows, with ``torsion``; :func:`ring_stiffness`). [-]"""
+HOLD_ANGLE = np.deg2rad(1.0)
+"""Relative rotation of the rings that a state held against a stop must survive
+(:func:`ring_stiffness`). [rad]"""
+
+
+def column_rows(model: RingPairModel) -> tuple[str, ...]:
+    """The constraint group of each of ``model``'s rows of one configuration."""
+    torsion = model.n_unknowns > model.n_rod
+    return COLUMN_ROWS + (("ring_stiffness",) if torsion else ())
+
+
+def ring_stiffness(model: RingPairModel, r: ca.SX, x: ca.SX, s: Symbols) -> ca.SX:
+    """The rings' lowest rotational stiffness at fixed pose, over the transmissions': the
+    least eigenvalue of the symmetric part of K_t^-1/2 H K_t^-1/2, K_t the transmissions'
+    stiffness GJ / L and H = K_t - dtau/dtheta, tau the axial torques on the rings from the
+    field and each other. H is a principal block of the Hessian of the total potential, so
+    a stable state has it positive definite; the touching rings' mutual torque (kappa > 1)
+    makes it indefinite.
+
+    With the stops (``printed_tip``), a ring pair held against a stop by the contact torque
+    lambda is stable as long as that torque exceeds the others' pull over a disturbance of
+    HOLD_ANGLE: the stop adds its secant stiffness |lambda| / HOLD_ANGLE on the relative
+    angle, not its contact stiffness (a stop touched without pressing, the pre-twist
+    free, holds nothing). [-]
+
+    r : the model's residual at x, whose rows from n_rod on are theta - command - tau L /
+    GJ (rad), the stops' torque in tau: dr/dtheta = K_t^-1 (K_t - dtau/dtheta)."""
+    n_rod = model.n_rod
+    theta = x[n_rod:]
+    compliance = s["free_length"] / s.torsional_rigidity
+    j = ca.jacobian(r[n_rod:], theta)
+    if "printed_tip" in model.effects:
+        k = stop_stiffness(compliance)
+        lam = stop_torque(theta[0] - theta[1], s["stop_angle"], k)
+        relative = ca.DM([[1.0, -1.0], [-1.0, 1.0]])
+        tangent = ca.jacobian(lam, theta[0])  # d lambda / d rho
+        held = ca.fabs(lam) / HOLD_ANGLE
+        # replace the contact's tangent stiffness (-tangent) by its secant one (held)
+        j = j + ca.diag(compliance) @ ((tangent + held) * relative)
+    w = ca.sqrt(compliance)
+    m = j * ((1 / w) @ w.T)  # K_t^1/2 (K_t^-1 H) K_t^-1/2
+    a, d, b = m[0, 0], m[1, 1], (m[0, 1] + m[1, 0]) / 2
+    return (a + d) / 2 - ca.sqrt(((a - d) / 2) ** 2 + b**2 + TINY**2)
 
 
 def _column(model: RingPairModel) -> ca.Function:
-    """One configuration: (x, command, prm) -> (equilibrium residual, COLUMN_ROWS, tip
+    """One configuration: (x, command, prm) -> (equilibrium residual, :func:`column_rows`, tip
     deflection from the straight robot's tip (3)). [SI]"""
     x = ca.SX.sym("x", model.n_unknowns)
     c = ca.SX.sym("command", 2)
@@ -242,6 +292,8 @@ def _column(model: RingPairModel) -> ca.Function:
             curvature * s["wire_outer_diameter"] / 2,
         ]
     rows += [twist[0], twist[1], magnet_clearance(s, position, frame)]
+    if model.n_unknowns > model.n_rod:
+        rows.append(ring_stiffness(model, r, x, s))
     deflection = position - rest_position(s["free_length"])
     return ca.Function(
         "study_column",
@@ -303,8 +355,9 @@ def core(shape: NlpShape) -> Core:
     column = _column(model)
     compiled = compile_functions([column, column.jacobian()])[0]
     design = _design_rows("printed_tip" in shape.effects)
-    evaluate, groups, free_groups = _evaluation(shape, cmd, params, compiled, design)
-    exact = _evaluation(shape, cmd, params, column, design)[0]
+    rows = column_rows(model)
+    evaluate, groups, free_groups = _evaluation(shape, cmd, params, compiled, design, rows)
+    exact = _evaluation(shape, cmd, params, column, design, rows)[0]
     return Core(shape, model, cmd, params, column, compiled, evaluate, exact, groups, free_groups)
 
 
@@ -322,8 +375,10 @@ def _evaluation(
     params: ca.Function,
     column: ca.Function,
     design: tuple[tuple[str, ...], ca.Function],
+    column_groups: tuple[str, ...],
 ) -> tuple[ca.Function, tuple[str, ...], frozenset[str]]:
-    """The study's rows and metrics from ``column`` mapped over the configurations:
+    """The study's rows and metrics from ``column`` mapped over the configurations (whose
+    rows are of ``column_groups``):
     (v, X, P, scale) -> (g, metrics, side distances, widths, signed area); the group of
     every row of g; the groups that depend on the free quantities or the unknowns."""
     n, nf, k_all = column.size1_in(0), len(shape.free), cmd.shape[1]
@@ -340,7 +395,7 @@ def _evaluation(
     neutral_distance = ca.sqrt(ca.sum1(neutral * neutral) + TINY**2).T
     g_design, volume, distance, catheter = design_rows(prm)
     g = ca.vertcat(ca.vec(rows_k[:, : k_all - 1]), neutral_distance, g_design)
-    groups = COLUMN_ROWS * (k_all - 1) + ("neutral",) * kn + design_groups
+    groups = column_groups * (k_all - 1) + ("neutral",) * kn + design_groups
 
     d = deflection[1:, :k_par]  # (2, K), y and z of the parallel loop
     dist = ca.sqrt(ca.sum1(d * d) + TINY**2).T

@@ -153,15 +153,21 @@ starts = 1
 """
 
 
-def test_stop_angle_free_in_the_nlp_with_torsion_and_stops():
-    """The mounting pieces' stop angle as a free variable (the demonstrator, whose touching
-    rings are multistable under torsion alone): the optimum is accepted (its loops driven
-    without a snap, no multistable state) and forward simulation reproduces its metrics
-    within 0.1 mm."""
-    study = loads_study(STOPS)
+@pytest.mark.parametrize("pretwist", [False, True], ids=["stop_angle", "stop_angle+pretwist"])
+def test_stops_free_in_the_nlp_with_torsion(pretwist):
+    """The mounting pieces' stop angle, and with it the pre-twist, as free variables (the
+    demonstrator, whose touching rings are multistable under torsion alone): the optimum
+    is accepted (its loops driven without a snap, no multistable state) and forward
+    simulation reproduces its metrics within 0.1 mm. With the pre-twist free, the optimiser
+    used to leave it at zero, the rings touching their stop without pressing on it, a
+    state that the loop check rightly rejected; the ``ring_stiffness`` rows now count the
+    stop's hold (tests/optimize/sizing/test_ring_stiffness.py)."""
+    text = STOPS.replace("[materials]", "pretwist_deg = [-30.0, 30.0]\n[materials]")
+    study = loads_study(text if pretwist else STOPS)
     result = optimize_design(study)
     assert result.feasible, result.report()
     assert "stop_angle" in result.values
+    assert ("pretwist" in result.values) == pretwist
     forward = evaluate_design(study, result.design, result.materials)
     assert forward.converged and forward.stable
     for name in LENGTHS:
