@@ -28,8 +28,12 @@ Formulation (one material combination, one start):
   tube within its material's allowable strain; twist of each transmission (L / GJ times
   the axial torque on its ring, from the same function: the solved twist with
   ``torsion``, its first-order estimate without) within the limit at every configuration;
-  rings on the wire and the wire in the catheter with clearance (at least
-  :data:`design.geometry.WIRE_CLEARANCE`); walls; the largest outer diameter; clearance
+  with ``torsion`` the rings' rotational stiffness (:func:`ring_stiffness`: a stop counts
+  by how hard it is pressed, so a free pre-twist presses the rings against it); rings on
+  the wire and the wire in the catheter with clearance (at least
+  :data:`design.geometry.WIRE_CLEARANCE`), and the ring bore over the printed pieces' wire
+  bore and passage (``ring_seat``, whatever the model: the study builds the pieces);
+  walls; the largest outer diameter; clearance
   of both rings to the external magnet at every configuration (the model's
   :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
   bounding sphere); the neutral deflection within tolerance (each antiparallel tip's
@@ -307,16 +311,19 @@ def _column(model: RingPairModel) -> ca.Function:
 
 def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
     """The rows that depend on the design alone, and prm -> (those rows, magnet volume,
-    external distance, catheter OD). [SI]"""
+    external distance, catheter OD). [SI]
+
+    The rings' seat is on the printed pieces (design.mounting) whatever model the study
+    designs with: the study builds those pieces."""
     prm = ca.SX.sym("params", len(NAMES))
     s = Symbols(prm)
     wire = s["wire_outer_diameter"]
-    # the printed tip's outer diameter (design.mounting) where the model has it
-    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
     volume = 2 * ring_volume(
         s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
     )
     distance = external_distance(s["free_length"], s.external_center)
+    # the printed tip's outer diameter (design.mounting) where the model has it
+    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
     rows = [
         ("ring_on_wire", s["magnet_inner_diameter"] - wire),
         ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
@@ -325,9 +332,9 @@ def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
         ("ring_diameter", tip_diameter),
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
-    if printed:  # the rings rest on the pieces' pocket floors (cad.mounting checks it)
-        seat = s["magnet_inner_diameter"] - ca.fmax(s.tip.wire_bore, s["catheter_inner_diameter"])
-        rows.append(("ring_seat", seat))
+    # the rings rest on the pieces' pocket floors (cad.mounting refuses anything else)
+    seat = s["magnet_inner_diameter"] - ca.fmax(s.tip.wire_bore, s["catheter_inner_diameter"])
+    rows.append(("ring_seat", seat))
     rows += [
         ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
         ("epsilon.external_distance", distance),
