@@ -13,6 +13,18 @@ grams (:data:`FREE_PARAMETERS`). Standard errors come from the Gauss-Newton cova
 Optional priors (``priors=True``) add one Gaussian penalty row per parameter, centred on
 the nominal design, with the widths of :data:`FREE_PARAMETERS`.
 
+Warm starts: the state of each configuration is the load ramp's
+(:func:`design.equilibrium.solve_equilibria`, or the driven path's), but between two
+evaluations of a fit the parameters change little, so each evaluation after the first
+takes every row's last state and solves once by Newton at the new parameters, with the
+checks of :func:`design.equilibrium.drive` (contraction, the stable side of the folds,
+clear of the magnet); rows that fail go through the ramp (along a path: the whole path
+again). Rows whose last state came from a fall (``snapped``) are solved afresh. The
+fit's answer is then solved by the ramp itself, and where any fitted row's tip differs
+from the warm-started one by more than WARM_TOLERANCE of its sigma, or has a state in one
+and none in the other, the fit is made again from its start with the ramp's states only.
+The returned result is always the ramp's.
+
 Identifiability, said plainly: without gravity or torsion the baseline's tip pose
 depends on the external remanence and the bending rigidity only through their ratio, so
 ``bending_rigidity_scale`` and ``external_remanence`` cannot both be free without priors
@@ -34,6 +46,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
+from design.equilibrium import Equilibria, drive, solve_equilibria
 from design.geometry import rest_position
 from design.model import RingPairModel, model_for
 from design.records import Design
@@ -48,8 +61,10 @@ from optimize.fitting.paper_grid import (
     two_factor_parameters,
 )
 from optimize.fitting.sensitivity import (
+    PATH_INDEPENDENT,
     SENSITIVE,
     Prediction,
+    applied_commands,
     position_errors,
     predict,
     prediction_sensitivities,
@@ -87,6 +102,10 @@ __all__ = [
 DEFAULT_SIGMA = 1e-3
 """Weight of rows without a sigma when the data give none (the common noise is then
 estimated from the residuals). [m]"""
+WARM_TOLERANCE = 1e-3
+"""The warm-started states of a fit's answer are the ramp's where every fitted row's tip
+lies within this fraction of its sigma of the ramp's (else the fit goes on with the
+ramp's). [-]"""
 TIP_ANGLE_SIGMA = np.deg2rad(3.0)
 """One-sigma uncertainty of measured tip angles when they are used. [rad]"""
 
@@ -289,6 +308,18 @@ class _Problem:
         self.evaluations = 0
         self._key: bytes | None = None
         self._cache: tuple[np.ndarray, np.ndarray, Prediction] | None = None
+        # Warm starts (module docstring): each row's last state, and whether the cached solve
+        # came from them (then the fit's answer is checked with the ramp, :meth:`settle`).
+        self.warm = True
+        self.states: np.ndarray | None = None
+        self.snapped: np.ndarray | None = None
+        self._warm_cached = False
+        self.warm_solves = 0
+        # predict solves rows on their own (the ramp) unless it follows the path
+        ordered = "hysteresis" in model.effects if ordered is None else ordered
+        self.on_their_own = not ordered or (
+            model.effects <= PATH_INDEPENDENT and ordered != "driven"
+        )
 
     def invalidate(self) -> None:
         """Forget the cached solve (after a change of weights)."""
@@ -317,15 +348,92 @@ class _Problem:
                 hi.append(min(spec.upper - p0, spec.span) / spec.step)
         return np.array(lo), np.array(hi)
 
-    def evaluate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, Prediction]:
+    def evaluate(
+        self, u: np.ndarray, cold: bool = False
+    ) -> tuple[np.ndarray, np.ndarray, Prediction]:
+        """Tip poses, their derivatives and the prediction at u (cached); ``cold``: by
+        :func:`predict` itself, never from the last states."""
         key = np.asarray(u, float).tobytes()
-        if key != self._key or self._cache is None:
+        cold = cold or not self.warm
+        if key != self._key or self._cache is None or (cold and self._warm_cached):
             p = self.params(u)
-            pred = predict(self.model, p, self.m, self.ordered)
+            pred = None
+            if self.warm and not cold and self.states is not None:
+                pred = self._warm_prediction(p)
+            self._warm_cached = pred is not None
+            if pred is None:
+                pred = predict(self.model, p, self.m, self.ordered)
+            eq = pred.equilibria
+            if self.states is None or self.snapped is None:
+                self.states, self.snapped = eq.unknowns.copy(), eq.snapped.copy()
+            else:
+                self.states[eq.converged] = eq.unknowns[eq.converged]
+                self.snapped[eq.converged] = eq.snapped[eq.converged]
             out, d_out = prediction_sensitivities(self.model, p, pred)
             self.evaluations += 1
             self._key, self._cache = key, (out, d_out, pred)
         return self._cache
+
+    def _warm_prediction(self, p: np.ndarray) -> Prediction | None:
+        """The prediction at ``p`` from each row's last state: one Newton solve each with
+        the checks of :func:`design.equilibrium.drive` (contraction, stable side of the
+        folds, clear of the magnet). Rows solved on their own whose solve fails, or that
+        have no last state or reached it by a fall (``snapped``), go through the load
+        ramp; along a path (where a row's state depends on the rows before it) any of
+        these sends the whole path to :func:`predict` (None)."""
+        assert self.states is not None and self.snapped is not None
+        applied, d_applied = applied_commands(self.model, p, self.m, self.ordered)
+        n, k = self.states.shape
+        # A state the ramp (or the path) reached by a fall may be another one at the new
+        # parameters even where the old one persists: those rows are solved afresh.
+        known = np.isfinite(self.states).all(axis=1) & ~self.snapped
+        if not self.on_their_own and not known.all():
+            return None
+        x = np.full((k, n), np.nan)
+        ok = np.zeros(n, bool)
+        cols = np.flatnonzero(known)
+        if cols.size:
+            c = applied[cols].T
+            x[:, cols], ok[cols] = drive(self.model, p, self.states[cols].T, c, c)
+            self.warm_solves += 1
+        if not self.on_their_own and not ok.all():
+            return None
+        nan3 = np.full((n, 3), np.nan)
+        eq = Equilibria(
+            command=self.m.command.copy(),
+            tip_angles=np.full((n, 2), np.nan),
+            position=nan3.copy(),
+            tangent=nan3.copy(),
+            frame=np.full((n, 3, 3), np.nan),
+            unknowns=x.T.copy(),
+            converged=ok.copy(),
+            stable=ok.copy(),
+            residual=np.where(ok, 0.0, np.nan),
+            snapped=np.zeros(n, bool),
+            multistable=np.zeros(n, bool),
+            failure=np.full(n, "", dtype=object),
+        )
+        ramp = np.flatnonzero(~ok)
+        if ramp.size:
+            cold = solve_equilibria(self.model, p, applied[ramp, 0], applied[ramp, 1])
+            for name, value in cold.__dict__.items():
+                if name != "command":
+                    getattr(eq, name)[ramp] = value
+        return Prediction(eq, applied, d_applied)
+
+    def settle(self, u: np.ndarray, tolerance: float) -> bool:
+        """Whether the fitted rows' states at u are the load ramp's (the one definition
+        of the state, :func:`predict`): True if the cached solve already is, or if the
+        ramp's tip positions agree with the warm-started ones within ``tolerance`` [m];
+        the ramp's solve is cached either way."""
+        if self._key == np.asarray(u, float).tobytes() and not self._warm_cached:
+            return True
+        warm_out, _, warm_pred = self.evaluate(u)
+        out, _, pred = self.evaluate(u, cold=True)
+        rows = self.fit
+        same = np.array_equal(warm_pred.equilibria.converged[rows], pred.equilibria.converged[rows])
+        diff = np.abs(warm_out[rows, :3] - out[rows, :3])
+        return same and bool(np.nanmax(diff, initial=0.0) <= tolerance)
 
     def residuals(self, u: np.ndarray) -> np.ndarray:
         out, _, _ = self.evaluate(u)
@@ -369,6 +477,7 @@ def calibrate(
     max_nfev: int | None = None,
     min_solved: float = 0.0,
     anchor: Mapping[str, tuple[float, float]] | None = None,
+    warm_start: bool = True,
 ) -> CalibrationResult:
     """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
 
@@ -387,6 +496,8 @@ def calibrate(
     anchor : free parameter -> (centre, width) [SI]: a Gaussian penalty row
         (value - centre) / width on the weighted residuals' scale (e.g. a fold of a
         cross-validation kept near the fit of all the data, :func:`cross_validate`).
+    warm_start : solve each evaluation from the states of the last one (module docstring);
+        False: every evaluation by the load ramp (or the path).
     min_solved : the fraction of fitted rows that must have an equilibrium at the start;
         below it :class:`UnsolvedStart` is raised before any fitting (a least-squares fit
         from a start where most rows have no state rarely finds one). [-]
@@ -411,6 +522,8 @@ def calibrate(
     prob = _Problem(
         model, base, names, m, fit_rows, s_rows, ordered, priors, tip_angles, np.zeros(len(names))
     )
+    prob.warm = warm_start
+    restarted = False
     for name, (centre, width) in (anchor or {}).items():
         j, spec = names.index(name), FREE_PARAMETERS[name]
         log = spec.kind == "log"
@@ -447,6 +560,7 @@ def calibrate(
     # not give it, estimate it from a first fit's residuals and fit again.
     noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
     passes = 2 if priors and not noise_known else 1
+    u_start = u0.copy()
     for attempt in range(passes):
         sol = least_squares(
             prob.residuals,
@@ -463,7 +577,23 @@ def calibrate(
             prob.sigma = prob.sigma * np.sqrt(float(r @ r) / dof)
             prob.invalidate()
     u = sol.x
-    out, _, pred = prob.evaluate(u)
+    if warm_start and not prob.settle(u, WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))):
+        # The warm starts followed other states than the ramp's (e.g. a state that
+        # persists at full load where the ramp from rest is pulled into the magnet): the
+        # fit again from its start, every state by the ramp.
+        prob.warm = False
+        sol = least_squares(
+            prob.residuals,
+            u_start,
+            jac=prob.jacobian,
+            bounds=(lo, hi),
+            method="trf",
+            x_scale=1.0,
+            max_nfev=max_nfev or 50 * (len(names) + 1),
+        )
+        u = sol.x
+        restarted = True
+    out, _, pred = prob.evaluate(u, cold=True)
     p = prob.params(u)
     r_data = prob.residuals(u)[: prob.n_data()]
     chi2 = float(r_data @ r_data)
@@ -485,6 +615,11 @@ def calibrate(
     corr[:, undetermined] = np.nan
     np.fill_diagonal(corr, 1.0)
     message = str(sol.message).rstrip(".")
+    if restarted:
+        message += (
+            "; fitted again with every state from the load ramp (the warm starts had "
+            "followed other states)"
+        )
     rank = int(determined.sum())
     if rank < len(names):
         loose = ", ".join(n for n, u in zip(names, undetermined, strict=True) if u)

@@ -161,12 +161,7 @@ def predict(
         return Prediction(eq, m.command.copy(), None)
     order = m.order()
     cmd = m.command[order]
-    applied_o, d_o = cmd, None
-    if "hysteresis" in model.effects:
-        width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
-        applied_o = play(cmd.T, width).T
-        jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
-        d_o = jac.reshape(len(cmd), 2, 2)
+    applied_o, d_o = _played(model, params, cmd)
     if model.effects <= PATH_INDEPENDENT and ordered != "driven":
         # the path acts only through the play: one batch solve of the rings' angles
         eq_o = solve_equilibria(model, params, applied_o[:, 0], applied_o[:, 1])
@@ -177,6 +172,39 @@ def predict(
     inverse[order] = np.arange(len(order))
     eq = Equilibria(**{k: v[inverse] for k, v in eq_o.__dict__.items()})
     return Prediction(eq, applied_o[inverse], None if d_o is None else d_o[inverse])
+
+
+def _played(
+    model: RingPairModel, params: np.ndarray, cmd: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The commands (N, 2) of an ordered path as the rings receive them, and their
+    derivatives (N, 2, 2) with respect to the friction angles (None without hysteresis)."""
+    if "hysteresis" not in model.effects:
+        return cmd, None
+    width = params[[index("wire_friction_angle"), index("catheter_friction_angle")]]
+    applied = play(cmd.T, width).T
+    jac = np.asarray(_play_jacobian(len(cmd))(cmd.T, width))
+    return applied, jac.reshape(len(cmd), 2, 2)
+
+
+def applied_commands(
+    model: RingPairModel,
+    params: np.ndarray,
+    m: Measurements,
+    ordered: bool | Literal["driven"] | None = None,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """What :func:`predict` gives the rings, rows as in ``m``: the commands (N, 2) after
+    any friction play along the order, and their derivatives (N, 2, 2) with respect to
+    the friction angles (None without the play). [rad]"""
+    if ordered is None:
+        ordered = "hysteresis" in model.effects
+    if not ordered:
+        return m.command.copy(), None
+    order = m.order()
+    applied_o, d_o = _played(model, np.asarray(params, float), m.command[order])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(len(order))
+    return applied_o[inverse], None if d_o is None else d_o[inverse]
 
 
 def prediction_sensitivities(

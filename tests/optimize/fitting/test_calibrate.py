@@ -260,3 +260,42 @@ def test_path_through_the_play_equals_driving_the_robot(demonstrator):
         pred.equilibria.position, driven.position[shuffled.sequence], atol=1e-12
     )
     np.testing.assert_allclose(pred.equilibria.command, shuffled.command)
+
+
+@pytest.mark.parametrize("effects", [(), ("torsion",), ("large_deflection",)])
+def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, effects):
+    """Warm starts (each evaluation from the last states) change the speed, not the
+    answer: the same estimates as a fit whose every state comes from the ramp, and the
+    returned residuals are the ramp's at the estimate."""
+    truth = {"wire_torsion_scale": 2.5, "catheter_torsion_scale": 1.5}
+    seed = 22
+    m = synthesize(demonstrator, ["torsion"], noise_mm=0.3, seed=seed, params_override=truth)
+    warm = calibrate(demonstrator, m, effects, max_nfev=30)
+    cold = calibrate(demonstrator, m, effects, max_nfev=30, warm_start=False)
+    why = f"seed {seed}, {effects}: warm {warm.estimate}, cold {cold.estimate}"
+    for name in cold.names:
+        assert warm.estimate[name] == pytest.approx(cold.estimate[name], rel=1e-6, abs=1e-9), why
+    ramp = solve_equilibria(
+        RingPairModel(frozenset(effects)), warm.params, m.command[:, 0], m.command[:, 1]
+    )
+    np.testing.assert_allclose(warm.residuals, m.position - ramp.position, atol=1e-9)
+
+
+def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypatch):
+    """Where the warm-started states are not the ramp's at the fit's answer, the fit is
+    made again from its start with the ramp's states only: the answer of a fit without
+    warm starts."""
+    import optimize.fitting.calibrate as calibration
+
+    def elsewhere(model, params, x, start, end):  # a Newton solve that lands elsewhere
+        out, ok = drive(model, params, x, start, end)
+        return out * 1.01, ok
+
+    drive = calibration.drive
+    monkeypatch.setattr(calibration, "drive", elsewhere)
+    m = synthesize(demonstrator, [], noise_mm=0.3, seed=23)
+    warm = calibrate(demonstrator, m, (), max_nfev=20)
+    cold = calibrate(demonstrator, m, (), max_nfev=20, warm_start=False)
+    assert "fitted again" in warm.message
+    assert warm.estimate == pytest.approx(cold.estimate, rel=1e-9)
+    assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-9)
