@@ -22,8 +22,9 @@ clear of the magnet); rows that fail go through the ramp (along a path: the whol
 again). Rows whose last state came from a fall (``snapped``) are solved afresh. The
 fit's answer is then solved by the ramp itself, and where any fitted row's tip differs
 from the warm-started one by more than WARM_TOLERANCE of its sigma, or has a state in one
-and none in the other, the fit is made again from its start with the ramp's states only.
-The returned result is always the ramp's.
+and none in the other, the fit is made again from its start with those rows by the ramp
+(WARM_RETRIES times, then every row by the ramp). The returned result is always the
+ramp's.
 
 Identifiability, said plainly: without gravity or torsion the baseline's tip pose
 depends on the external remanence and the bending rigidity only through their ratio, so
@@ -102,6 +103,9 @@ __all__ = [
 DEFAULT_SIGMA = 1e-3
 """Weight of rows without a sigma when the data give none (the common noise is then
 estimated from the residuals). [m]"""
+WARM_RETRIES = 1
+"""Fits made again from the start with warm starts, the rows whose warm start went
+elsewhere by the ramp, before one with every row by the ramp."""
 WARM_TOLERANCE = 1e-3
 """The warm-started states of a fit's answer are the ramp's where every fitted row's tip
 lies within this fraction of its sigma of the ramp's (else the fit goes on with the
@@ -313,6 +317,7 @@ class _Problem:
         self.warm = True
         self.states: np.ndarray | None = None
         self.snapped: np.ndarray | None = None
+        self.ramp_only = np.zeros(len(m), bool)  # rows whose warm start went elsewhere
         self._warm_cached = False
         self.warm_solves = 0
         # predict solves rows on their own (the ramp) unless it follows the path
@@ -386,7 +391,7 @@ class _Problem:
         n, k = self.states.shape
         # A state the ramp (or the path) reached by a fall may be another one at the new
         # parameters even where the old one persists: those rows are solved afresh.
-        known = np.isfinite(self.states).all(axis=1) & ~self.snapped
+        known = np.isfinite(self.states).all(axis=1) & ~self.snapped & ~self.ramp_only
         if not self.on_their_own and not known.all():
             return None
         x = np.full((k, n), np.nan)
@@ -421,19 +426,19 @@ class _Problem:
                     getattr(eq, name)[ramp] = value
         return Prediction(eq, applied, d_applied)
 
-    def settle(self, u: np.ndarray, tolerance: float) -> bool:
-        """Whether the fitted rows' states at u are the load ramp's (the one definition
-        of the state, :func:`predict`): True if the cached solve already is, or if the
-        ramp's tip positions agree with the warm-started ones within ``tolerance`` [m];
-        the ramp's solve is cached either way."""
+    def settle(self, u: np.ndarray, tolerance: float) -> np.ndarray:
+        """The fitted rows (shape (N,) bool) whose warm-started state at u is not the
+        load ramp's (the one definition of the state, :func:`predict`): a state in one and
+        none in the other, or tips more than ``tolerance`` [m] apart; none if the cached
+        solve already is the ramp's. The ramp's solve is cached either way."""
         if self._key == np.asarray(u, float).tobytes() and not self._warm_cached:
-            return True
+            return np.zeros(len(self.m), bool)
         warm_out, _, warm_pred = self.evaluate(u)
         out, _, pred = self.evaluate(u, cold=True)
-        rows = self.fit
-        same = np.array_equal(warm_pred.equilibria.converged[rows], pred.equilibria.converged[rows])
-        diff = np.abs(warm_out[rows, :3] - out[rows, :3])
-        return same and bool(np.nanmax(diff, initial=0.0) <= tolerance)
+        other = warm_pred.equilibria.converged != pred.equilibria.converged
+        with np.errstate(invalid="ignore"):
+            other |= np.abs(warm_out[:, :3] - out[:, :3]).max(axis=1) > tolerance
+        return other & self.fit
 
     def residuals(self, u: np.ndarray) -> np.ndarray:
         out, _, _ = self.evaluate(u)
@@ -577,11 +582,16 @@ def calibrate(
             prob.sigma = prob.sigma * np.sqrt(float(r @ r) / dof)
             prob.invalidate()
     u = sol.x
-    if warm_start and not prob.settle(u, WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))):
+    tolerance = WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))
+    for retry in range(WARM_RETRIES + 1):
+        other = prob.settle(u, tolerance) if prob.warm else np.zeros(len(m), bool)
+        if not other.any():
+            break
         # The warm starts followed other states than the ramp's (e.g. a state that
         # persists at full load where the ramp from rest is pulled into the magnet): the
-        # fit again from its start, every state by the ramp.
-        prob.warm = False
+        # fit again from its start, those rows by the ramp (at last every row).
+        prob.ramp_only |= other
+        prob.warm = retry < WARM_RETRIES
         sol = least_squares(
             prob.residuals,
             u_start,
@@ -617,8 +627,8 @@ def calibrate(
     message = str(sol.message).rstrip(".")
     if restarted:
         message += (
-            "; fitted again with every state from the load ramp (the warm starts had "
-            "followed other states)"
+            f"; fitted again from the start with {int(prob.ramp_only.sum())} row(s) by the "
+            "load ramp (their warm starts had followed other states)"
         )
     rank = int(determined.sum())
     if rank < len(names):

@@ -283,19 +283,22 @@ def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, eff
 
 def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypatch):
     """Where the warm-started states are not the ramp's at the fit's answer, the fit is
-    made again from its start with the ramp's states only: the answer of a fit without
+    made again from its start with those rows by the ramp: the answer of a fit without
     warm starts."""
     import optimize.fitting.calibrate as calibration
 
-    def elsewhere(model, params, x, start, end):  # a Newton solve that lands elsewhere
+    def elsewhere(model, params, x, start, end):
+        """A Newton solve that lands elsewhere for commands with theta1 > 0."""
         out, ok = drive(model, params, x, start, end)
-        return out * 1.01, ok
+        return np.where(start[0] > 0, out * 1.01, out), ok
 
     drive = calibration.drive
     monkeypatch.setattr(calibration, "drive", elsewhere)
     m = synthesize(demonstrator, [], noise_mm=0.3, seed=23)
     warm = calibrate(demonstrator, m, (), max_nfev=20)
     cold = calibrate(demonstrator, m, (), max_nfev=20, warm_start=False)
-    assert "fitted again" in warm.message
-    assert warm.estimate == pytest.approx(cold.estimate, rel=1e-9)
-    assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-9)
+    moved = int(np.count_nonzero(m.command[:, 0] > 0))
+    assert 0 < moved < len(m)
+    assert f"fitted again from the start with {moved} row(s) by the load ramp" in warm.message
+    assert warm.estimate == pytest.approx(cold.estimate, rel=1e-6)
+    assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-6)
