@@ -2,9 +2,7 @@
 
 Each point of a sweep bounds one quantity (catheter outer diameter and magnet volume from
 above, external-magnet distance from below, :data:`optimize.sizing.studyfile.PARETO_QUANTITIES`) and
-maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`, from the
-study's unconstrained optimum where it is given (a continuation: about 35 % less time per
-point than from the base design on the default study, the same optima). Points are
+maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points are
 independent, so they run as Dask tasks: on a local cluster (processes, one thread each)
 by default, or on an existing cluster given its scheduler address. Each finished point
 is stored under ``out_dir/points/`` keyed by a hash of the study and the point, so a rerun
@@ -20,7 +18,7 @@ import hashlib
 import logging
 import pickle
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,21 +69,17 @@ class ParetoResult:
     workers: int
 
 
-def point_key(
-    study: Study, against: str, epsilon: float, start: Mapping[str, float] | None = None
-) -> str:
-    """Identity of one point's inputs: the study (every field), the bound and the start. [-]"""
-    first = None if start is None else sorted((k, round(float(v), 15)) for k, v in start.items())
-    blob = pickle.dumps((study, against, round(float(epsilon), 15), first), protocol=4)
+def point_key(study: Study, against: str, epsilon: float) -> str:
+    """Identity of one point's inputs: the study (every field) and the bound. [-]"""
+    blob = pickle.dumps((study, against, round(float(epsilon), 15)), protocol=4)
     return hashlib.sha256(blob).hexdigest()[:24]
 
 
 def _solve_point(
-    study: Study, against: str, epsilon: float, start: Mapping[str, float] | None = None
+    study: Study, against: str, epsilon: float
 ) -> tuple[OptimizationResult | None, str]:
     try:
-        starts = None if start is None else [start]
-        return optimize_design(study, epsilon={against: epsilon}, starts=starts), ""
+        return optimize_design(study, epsilon={against: epsilon}), ""
     except Exception as exc:  # a failed point is an answer, not the end of the sweep
         return None, f"{type(exc).__name__}: {exc}"
 
@@ -113,22 +107,19 @@ def run_sweeps(
     scheduler: str | None = None,
     workers: int = 2,
     progress: Progress | None = None,
-    start: Mapping[str, float] | None = None,
 ) -> ParetoResult:
     """Solve every Pareto sweep of ``study`` (``study.pareto``), resuming from ``out_dir``.
 
     scheduler : address of a running Dask scheduler (e.g. ``tcp://host:8786``); None starts
         a local cluster of ``workers`` processes for the duration of the call.
     progress : called with (points done, points in all).
-    start : the free quantities (by name, SI) every point starts from, the study's
-        optimum (:attr:`OptimizationResult.values`); None: the study's own starts.
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
     t0 = time.perf_counter()
     store = Path(out_dir) / POINTS
     plan = [
-        (s.against, float(e), store / f"{point_key(study, s.against, e, start)}.pkl")
+        (s.against, float(e), store / f"{point_key(study, s.against, e)}.pkl")
         for s in study.pareto
         for e in pareto_values(study, s)
     ]
@@ -160,7 +151,7 @@ def run_sweeps(
             with Client(cluster if cluster is not None else scheduler) as client:
                 used = len(client.scheduler_info()["workers"])
                 futures = {
-                    client.submit(_solve_point, study, a, e, start, pure=False): (a, e, p)
+                    client.submit(_solve_point, study, a, e, pure=False): (a, e, p)
                     for a, e, p in todo
                 }
                 for future in as_completed(futures):
