@@ -17,6 +17,20 @@ on its own), gravity, and two rods:
   analytic gradient) at each step of the same load ramp, starting from the last minimum,
   so that it follows the branch and, past a fold, goes downhill to the next minimum.
 
+With the printed tip (``printed_tip``, the mounting pieces of :mod:`design.mounting`, whose
+dimensions are read only through :func:`design.mounting.tip_geometry`) the flexible rod
+(either kind) is shorter by the rigid segment's offset: it ends at the proximal piece's
+proximal face, and a rigid body carries the rings, the tracked point (the proximal ring's
+centre, ``rigid_offset`` along the rod's end tangent) and the pieces, whose weights act at
+their centres of mass. Every load on that body is a point load (force at a point, couple)
+whose moment about the rod's end is summed as such. With ``torsion`` the pieces' stops are
+a contact on the rings' relative angle rho = theta1 - theta2 (tip), held within [0, S]: a
+one-sided spring of the model's contact stiffness (``design.stops.STOP_STIFFNESS`` times
+the two transmissions in series; a chosen number, not physics), potential
+k/2 (min(rho, 0)^2 + max(rho - S, 0)^2); the wire's command is the relative command taken
+within the turn centred on [0, S], plus the pre-twist (docs/formats.md). Without
+``torsion`` the rings sit at their commanded angles and stops and pre-twist do not act.
+
 Both start from the unloaded, straight robot with the rings at their commanded angles.
 :func:`energy_hessian_eigenvalues` gives the finite-difference Hessian of the chain's
 energy at a state (a stability check independent of the solver's). SI units throughout.
@@ -32,8 +46,10 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
+from design.mounting import tip_geometry
 from design.records import Design
 from design.ring_coupling import coupling_coefficient
+from design.stops import STOP_STIFFNESS
 
 MU0 = 4e-7 * np.pi * 1.00000000055  # CODATA 2018 vacuum permeability [T m / A]
 FD_STEP = 2e-6
@@ -44,7 +60,9 @@ FD_STEP = 2e-6
 class Robot:
     """What the oracle needs, computed from the design record. [SI]"""
 
-    length: float
+    length: float  # free length: base to the tracked point; the transmissions twist over it
+    rod: float  # the flexible rod: the free length less the rigid segment's offset
+    offset: float  # rod's end to the tracked point (the proximal ring's centre) [m]
     ei: float
     gj: np.ndarray  # (wire -> distal ring, catheter -> proximal ring)
     mass_per_length: float
@@ -52,11 +70,54 @@ class Robot:
     spacing: float
     ring_mass: float
     tip_mass: float
+    pieces: tuple[tuple[float, float], ...]  # (arm from the rod's end, mass) of each piece
     k12: float
     gravity: np.ndarray
+    stops: tuple[float, float] | None  # (stop angle S, pre-twist) with the printed tip
+
+    def ring_centres(self, end: np.ndarray, tangent: np.ndarray) -> np.ndarray:
+        """(distal, proximal) ring centres (2, 3) of the rod's end at ``end`` with
+        ``tangent``: on the rigid segment, the proximal one at the tracked point."""
+        return np.vstack(
+            [end + (self.offset + self.spacing) * tangent, end + self.offset * tangent]
+        )
+
+    def point_masses(self) -> tuple[np.ndarray, np.ndarray]:
+        """(arms from the rod's end along its tangent (k,), masses (k,)) of everything the
+        rod's end carries: the rings, the extra tip mass at the proximal ring's centre, the
+        printed pieces at their centres of mass. [m, kg]"""
+        arms = [self.offset + self.spacing, self.offset, self.offset]
+        masses = [self.ring_mass, self.ring_mass, self.tip_mass]
+        for arm, mass in self.pieces:
+            arms.append(arm)
+            masses.append(mass)
+        return np.array(arms), np.array(masses)
+
+    def commanded(self, command: np.ndarray) -> np.ndarray:
+        """The angles the twisting transmissions (``torsion``) are turned to (2,): the
+        command, or with stops the wire's relative command within the turn centred on
+        [0, S] plus the pre-twist. (Rigid in torsion, the transmissions hold the rings at
+        the command, and stops and pre-twist do not act: docs/formats.md.)"""
+        if self.stops is None:
+            return np.asarray(command, float)
+        stop, pretwist = self.stops
+        relative = command[0] - command[1]
+        centred = stop / 2 + np.mod(relative - stop / 2 + np.pi, 2 * np.pi) - np.pi
+        return np.array([command[1] + centred + pretwist, command[1]])
+
+    def stop_contact(self, angles: np.ndarray) -> tuple[float, float]:
+        """(potential [J], its derivative in rho [N m]) of the stops at tip angles
+        ``angles``; zero without stops."""
+        if self.stops is None:
+            return 0.0, 0.0
+        k = STOP_STIFFNESS / (self.length / self.gj[0] + self.length / self.gj[1])
+        rho = angles[0] - angles[1]
+        below, above = min(rho, 0.0), max(rho - self.stops[0], 0.0)
+        return 0.5 * k * (below**2 + above**2), k * (below + above)
 
 
-def robot(design: Design) -> Robot:
+def robot(design: Design, printed: bool = False) -> Robot:
+    """The oracle's robot; ``printed``: with the printed tip (``printed_tip``)."""
     r, t = design.robot, design.tip
 
     def section(tube):
@@ -74,8 +135,24 @@ def robot(design: Design) -> Robot:
         t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, spacing, t.remanence
     )
     g = design.environment.gravity
+    offset, pieces, stops = 0.0, (), None
+    if printed:
+        m = t.mounting
+        geometry = tip_geometry(
+            t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.gap,
+            r.catheter.outer_diameter, r.wire.outer_diameter, r.catheter.inner_diameter,
+            m.wall, m.fit_allowance, m.running_clearance, m.density, m.stop_angle,
+        )  # fmt: skip
+        offset = float(geometry.rigid_offset)
+        pieces = (
+            (float(geometry.proximal_arm), float(geometry.proximal_mass)),
+            (float(geometry.distal_arm), float(geometry.distal_mass)),
+        )
+        stops = (m.stop_angle, m.pretwist)
     return Robot(
         length=r.free_length,
+        rod=r.free_length - offset,
+        offset=offset,
         ei=ei_c + ei_w,
         gj=np.array([gj_w, gj_c]),
         mass_per_length=mu_c + mu_w,
@@ -83,8 +160,10 @@ def robot(design: Design) -> Robot:
         spacing=spacing,
         ring_mass=t.density * volume,
         tip_mass=t.mass,
+        pieces=pieces,
         k12=k12,
         gravity=np.zeros(3) if g is None else np.asarray(g, float),
+        stops=stops,
     )
 
 
@@ -166,26 +245,29 @@ def _linear_residual(
     torsion: bool,
     gravity: bool,
 ) -> np.ndarray:
-    """The paper's linear cantilever and the transmissions' twist, written anew."""
-    L, ei = rb.length, rb.ei
+    """The paper's linear cantilever (of the flexible rod's length) and the transmissions'
+    twist, written anew. The rod's end sits at (rod, q0, q1) with the frame of the rotation
+    vector (0, q2, q3); what it carries loads it through the force sum and the moment
+    about the end."""
+    L, ei = rb.rod, rb.ei
     q = x[:4]
     angles = x[4:6] if torsion else command
     frame = _frame_from_rotation_vector(np.array([0.0, q[2], q[3]]))
     tangent = frame[:, 0]
-    tip = np.array([L, q[0], q[1]])
-    centres = np.vstack([tip + rb.spacing * tangent, tip])  # distal, proximal
+    end = np.array([L, q[0], q[1]])
+    centres = rb.ring_centres(end, tangent)  # distal, proximal
     moments = lam * ring_moments(frame, angles, rb.moment)
     b, grad = field.with_gradient(centres)
     forces = np.einsum("kij,ki->kj", grad, moments)  # grad(m . B)
     torques = np.cross(moments, b)
     force = forces.sum(axis=0)
-    torque = torques.sum(axis=0) + rb.spacing * np.cross(tangent, forces[0])
+    torque = torques.sum(axis=0) + np.cross(centres - end, forces).sum(axis=0)
     w = np.zeros(3)
     if gravity:
         g = lam * rb.gravity
-        ring_weight = rb.ring_mass * g
-        force = force + 2 * ring_weight + rb.tip_mass * g
-        torque = torque + rb.spacing * np.cross(tangent, ring_weight)
+        arms, masses = rb.point_masses()
+        force = force + masses.sum() * g
+        torque = torque + np.cross((arms * masses).sum() * tangent, g)
         w = rb.mass_per_length * g
     bending = torque - (torque @ tangent) * tangent
     a, bb, c = L**3 / (3 * ei), L**2 / (2 * ei), L / ei
@@ -210,8 +292,9 @@ def _linear_residual(
         return r
     axial = np.einsum("ki,i->k", torques, tangent)
     coupling = lam**2 * rb.k12 * np.sin(angles[0] - angles[1])
-    axial = axial + np.array([coupling, -coupling])
-    return np.concatenate([r, angles - command - L / rb.gj * axial])
+    contact = -rb.stop_contact(angles)[1]  # the stops' torque on the distal ring
+    axial = axial + np.array([coupling + contact, -coupling - contact])
+    return np.concatenate([r, angles - rb.commanded(command) - rb.length / rb.gj * axial])
 
 
 def _jacobian(fun, x: np.ndarray, step: float = 1e-7) -> np.ndarray:
@@ -240,21 +323,23 @@ def linear_state(
     potential V and rests only in a minimum, where the real robot comes to rest. Returns
     (unknowns (4 or 6,), tip position (3,), the smallest :func:`ring_clearance` at the
     states of the ramp [m]); NaN if the flow is lost."""
-    rb, field = robot(design), Field(design, "near_field" in effects)
+    rb = robot(design, "printed_tip" in effects)
+    field = Field(design, "near_field" in effects)
     torsion, gravity = "torsion" in effects, "gravity" in effects
     x = np.zeros(6 if torsion else 4)
     if torsion:
-        x[4:] = command
+        x[4:] = rb.commanded(command)
     nan = np.full_like(x, np.nan), np.full(3, np.nan), np.nan
     clearance = np.inf
-
-    def tip_of(y):
-        return np.array([rb.length, y[0], y[1]])
 
     def tangent_of(y):
         return _frame_from_rotation_vector(np.array([0.0, y[2], y[3]]))[:, 0]
 
-    for lam in np.linspace(0.0, 1.0, ramp + 1)[1:]:
+    def tip_of(y):  # the tracked point
+        return np.array([rb.rod, y[0], y[1]]) + rb.offset * tangent_of(y)
+
+    # From load 0: with stops the unloaded robot first settles against them.
+    for lam in np.linspace(0.0, 1.0, ramp + 1):
 
         def flow(_t, y, lam=lam):
             return -_linear_residual(y, command, rb, field, lam, torsion, gravity)
@@ -269,7 +354,12 @@ def linear_state(
         if np.abs(flow(0.0, x)).max() > 1e-9:
             atol = 1e-10 * np.where(np.arange(x.size) < 2, rb.length, 1.0)  # [m], [rad]
             sol = solve_ivp(
-                flow, (0.0, 1e6), x, method="LSODA", events=[rested, touching], rtol=1e-6,
+                flow,
+                (0.0, 1e6),
+                x,
+                method="LSODA",
+                events=[rested, touching],
+                rtol=1e-6,
                 atol=atol,
             )
             x = sol.y[:, -1]
@@ -294,9 +384,10 @@ def linear_stiffness_eigenvalues(
     and the transmissions' GJ / L; dr/dx by central differences), each scaled by its
     diagonal: the Hessian of the total potential of the linear model (conservative to
     first order), so all positive iff stable."""
-    rb, field = robot(design), Field(design, "near_field" in effects)
+    rb = robot(design, "printed_tip" in effects)
+    field = Field(design, "near_field" in effects)
     torsion, gravity = "torsion" in effects, "gravity" in effects
-    L, ei = rb.length, rb.ei
+    L, ei = rb.rod, rb.ei
     k = np.array(
         [
             [12 * ei / L**3, 0, 0, -6 * ei / L**2],
@@ -306,7 +397,7 @@ def linear_stiffness_eigenvalues(
         ]
     )
     if torsion:
-        k = np.block([[k, np.zeros((4, 2))], [np.zeros((2, 4)), np.diag(rb.gj / L)]])
+        k = np.block([[k, np.zeros((4, 2))], [np.zeros((2, 4)), np.diag(rb.gj / rb.length)]])
     jac = _jacobian(lambda y: _linear_residual(y, command, rb, field, 1.0, torsion, gravity), x)
     h = k @ jac
     h = 0.5 * (h + h.T)
@@ -338,17 +429,19 @@ def _right_jacobian(w: np.ndarray) -> np.ndarray:
 class Chain:
     """The large-deflection rod as N links (see the module docstring); unknowns: the
     joints' rotation vectors (y, z components in the link frame), then the tip ring angles
-    with torsion."""
+    with torsion. With the printed tip the links span the flexible rod only and the last
+    link's frame carries the rigid segment."""
 
     def __init__(self, design: Design, effects: frozenset[str], links: int = 100) -> None:
-        self.rb = robot(design)
+        self.rb = robot(design, "printed_tip" in effects)
         self.field = Field(design, "near_field" in effects)
         self.torsion = "torsion" in effects
         self.gravity = "gravity" in effects
         self.n = links
-        self.h = self.rb.length / links
+        self.h = self.rb.rod / links
 
     def _shape(self, w2: np.ndarray):
+        """(joint rotation vectors, frames (n + 1), joints, the rod's end)."""
         n, h = self.n, self.h
         w = np.zeros((n, 3))
         w[:, 1:] = w2.reshape(n, 2)
@@ -361,30 +454,31 @@ class Chain:
         joints = np.empty((n, 3))
         joints[0] = [h / 2, 0.0, 0.0]
         joints[1:] = joints[0] + h * np.cumsum(tangents[1:n], axis=0)
-        tip = joints[-1] + h / 2 * tangents[n]
-        return w, frames, joints, tip
+        end = joints[-1] + h / 2 * tangents[n]
+        return w, frames, joints, end
 
-    def _masses(self, joints: np.ndarray, tip: np.ndarray, tangent: np.ndarray):
+    def _masses(self, joints: np.ndarray, end: np.ndarray, tangent: np.ndarray):
         """Point masses (k,) at positions (k, 3) of the rod links (beyond the clamp's half
-        link), the rings and the tip mass, and the joint index each lies beyond."""
+        link) and of everything the rod's end carries (:meth:`Robot.point_masses`), and
+        the joint index each lies beyond."""
         rb, h, n = self.rb, self.h, self.n
-        centres = np.vstack([(joints[:-1] + joints[1:]) / 2, (joints[-1] + tip) / 2])
+        centres = np.vstack([(joints[:-1] + joints[1:]) / 2, (joints[-1] + end) / 2])
         masses = np.full(n, rb.mass_per_length * h)
         masses[-1] /= 2
-        distal = tip + rb.spacing * tangent
-        points = np.vstack([centres, [tip, distal, tip]])
-        mass = np.concatenate([masses, [rb.ring_mass, rb.ring_mass, rb.tip_mass]])
-        beyond = np.concatenate([np.arange(n), [n - 1, n - 1, n - 1]])
+        arms, carried = rb.point_masses()
+        points = np.vstack([centres, end + arms[:, None] * tangent])
+        mass = np.concatenate([masses, carried])
+        beyond = np.concatenate([np.arange(n), np.full(len(carried), n - 1)])
         return mass, points, beyond
 
     def energy_and_gradient(self, u: np.ndarray, command: np.ndarray, lam: float):
         rb, n, h = self.rb, self.n, self.h
         w2 = u[: 2 * n]
         angles = u[2 * n :] if self.torsion else command
-        w, frames, joints, tip = self._shape(w2)
+        w, frames, joints, end = self._shape(w2)
         frame = frames[n]
         tangent = frame[:, 0]
-        centres = np.vstack([tip + rb.spacing * tangent, tip])
+        centres = rb.ring_centres(end, tangent)
         moments = lam * ring_moments(frame, angles, rb.moment)
         b, grad = self.field.with_gradient(centres)
         forces = np.einsum("kij,ki->kj", grad, moments)
@@ -399,7 +493,7 @@ class Chain:
         total_moment[:] = ring_moment
         if self.gravity:
             g = lam * rb.gravity
-            mass, points, beyond = self._masses(joints, tip, tangent)
+            mass, points, beyond = self._masses(joints, end, tangent)
             energy -= np.sum(mass * (points @ g))
             weights = mass[:, None] * g
             f_joint = np.zeros((n, 3))
@@ -415,10 +509,13 @@ class Chain:
         gradient = rb.ei / h * w2 + grad_w.ravel()
         if not self.torsion:
             return energy, gradient
-        twist = angles - command
+        twist = angles - rb.commanded(command)
         coupling = lam**2 * rb.k12
-        energy += np.sum(rb.gj / (2 * rb.length) * twist**2) + coupling * np.cos(
-            angles[0] - angles[1]
+        contact, contact_slope = rb.stop_contact(angles)
+        energy += (
+            np.sum(rb.gj / (2 * rb.length) * twist**2)
+            + coupling * np.cos(angles[0] - angles[1])
+            + contact
         )
         dm = (
             lam
@@ -426,22 +523,29 @@ class Chain:
             * (-np.sin(angles)[:, None] * frame[:, 1] + np.cos(angles)[:, None] * frame[:, 2])
         )
         s = np.sin(angles[0] - angles[1])
-        grad_a = rb.gj / rb.length * twist - np.sum(dm * b, axis=1) - coupling * np.array([s, -s])
+        grad_a = (
+            rb.gj / rb.length * twist
+            - np.sum(dm * b, axis=1)
+            + (contact_slope - coupling * s) * np.array([1.0, -1.0])
+        )
         return energy, np.concatenate([gradient, grad_a])
 
     def start(self, command: np.ndarray) -> np.ndarray:
         u = np.zeros(2 * self.n + (2 if self.torsion else 0))
         if self.torsion:
-            u[2 * self.n :] = command
+            u[2 * self.n :] = self.rb.commanded(command)
         return u
 
     def tip(self, u: np.ndarray) -> np.ndarray:
-        return self._shape(u[: 2 * self.n])[3]
+        """The tracked point (the proximal ring's centre). [m]"""
+        _, frames, _, end = self._shape(u[: 2 * self.n])
+        return end + self.rb.offset * frames[self.n][:, 0]
 
     def clearance(self, design: Design, u: np.ndarray) -> float:
         """:func:`ring_clearance` of the chain's rings. [m]"""
-        _, frames, _, tip = self._shape(u[: 2 * self.n])
-        return ring_clearance(design, tip, frames[self.n][:, 0])
+        _, frames, _, end = self._shape(u[: 2 * self.n])
+        tangent = frames[self.n][:, 0]
+        return ring_clearance(design, end + self.rb.offset * tangent, tangent)
 
     def relax(self, u: np.ndarray, command: np.ndarray, lam: float, tight: bool) -> np.ndarray:
         result = minimize(
@@ -473,7 +577,7 @@ def chain_state(
     chain = Chain(design, effects, links)
     u = chain.start(command)
     clearance = np.inf
-    for lam in np.linspace(0.0, 1.0, ramp + 1)[1:]:
+    for lam in np.linspace(0.0, 1.0, ramp + 1)[int(chain.rb.stops is None) :]:
         u = chain.relax(u, command, lam, tight=lam == 1.0)
         clearance = min(clearance, chain.clearance(design, u))
     return chain, u, chain.tip(u), clearance
@@ -496,7 +600,7 @@ def rod_frames(
     anew (scipy's DOP853) from the clamp with the base force and moment ``base_wrench``
     (6,) [N, N m]: p' = t, R' = [omega] R with omega = (m - (t.m) t) / EI (bending only),
     m' = n x t, n = n0 - q s (q the rod's weight per length with gravity)."""
-    rb = robot(design)
+    rb = robot(design, "printed_tip" in effects)
     q = rb.mass_per_length * rb.gravity if "gravity" in effects else np.zeros(3)
     n0, m0 = base_wrench[:3], base_wrench[3:]
 
@@ -507,9 +611,7 @@ def rod_frames(
         return np.concatenate([t, (_skew(omega) @ frame).ravel(), np.cross(n0 - q * s, t)])
 
     y0 = np.concatenate([np.zeros(3), np.eye(3).ravel(), m0])
-    sol = solve_ivp(
-        rhs, (0.0, rb.length), y0, method="DOP853", t_eval=points, rtol=1e-12, atol=1e-14
-    )
+    sol = solve_ivp(rhs, (0.0, rb.rod), y0, method="DOP853", t_eval=points, rtol=1e-12, atol=1e-14)
     frames = sol.y[3:12].T.reshape(-1, 3, 3)
     u, _, vt = np.linalg.svd(frames)  # re-orthonormalise
     return u @ vt
