@@ -28,9 +28,10 @@ friction. Effects (docs/formats.md names), each reducing to the baseline in its 
 The baseline leaves the rigid segment out on purpose: it is the paper's model, whose rod is
 the catheter's whole free length with the rings at its end (eq. 6, L = 150 mm) and whose
 stiffness scale K_E was tuned on that geometry; adding the segment would change the
-reproduced results without making them the paper's. ``printed_tip`` is meant for the model
-for design work (issue 16); it joins :data:`DEFAULT_EFFECTS` once the independent oracle of
-the state tests (tests/support/oracle.py) models the rigid segment too.
+reproduced results without making them the paper's. ``printed_tip`` is part of the model
+for design work, :data:`DEFAULT_EFFECTS` (issue 16); the state tests check it against an
+independent solve with the rigid segment, the pieces' weights and the stops
+(tests/support/oracle.py, tests/design/test_state_properties.py).
 
 Unknowns x: rod coordinates (linear: q = (dy, dz, phi_y, phi_z); large deflection: the
 base internal force n0 and moment m0, scaled to (n0 L^3 / EI, m0 L / EI)), then the tip
@@ -71,13 +72,14 @@ SWITCHES = (*EFFECTS, PRINTED_TIP)
 """Everything a :class:`RingPairModel` can switch on."""
 
 
-DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity"})
-"""The model for design work: the most faithful that is well posed from a design file alone
-and stays fast (about 11,000 configurations per second on two cores). ``torsion`` is left out:
+DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity", PRINTED_TIP})
+"""The model for design work: the robot as it will be built (the printed tip's rigid segment
+and weight, :data:`PRINTED_TIP`; its pieces from the design file's ``[tip.mounting]`` or the
+resin defaults), the most faithful model that is well posed from a design file alone and
+stays fast (about 11,000 configurations per second on two cores). ``torsion`` is left out:
 with touching rings (kappa > 1) it makes the robot multistable, so the state depends on the
 path driven and on mechanical stops, not on the commanded angles alone; ``hysteresis`` needs
-friction angles, which come from bench data; ``printed_tip`` waits for the state tests'
-oracle (see the module's docstring)."""
+friction angles, which come from bench data."""
 
 
 def available_effects() -> tuple[str, ...]:

@@ -117,8 +117,8 @@ EFFECTS_HELP = (
     + ",".join(sorted(DEFAULT_EFFECTS))
     + "), 'all' or a comma list of "
     + ", ".join(SWITCHES)
-    + " (printed_tip: the printed mounting pieces' rigid segment and weight; see the README "
-    "for what each adds and costs)."
+    + " (printed_tip: the printed mounting pieces' rigid segment, weight and, with torsion, "
+    "stops; see the README for what each adds and costs)."
 )
 
 

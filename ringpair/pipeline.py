@@ -9,7 +9,7 @@ Stages (each a function of the study and earlier stages' results, timed, cached 
    NLP solved again with that one limit moved by :data:`RELAX`);
 3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sizing.pareto.run_sweeps`);
 4. ``forward``: the starting and the chosen design re-simulated with the model for design
-   work (:data:`design.model.DEFAULT_EFFECTS`, with the printed tip where the study has it:
+   work (:data:`design.model.DEFAULT_EFFECTS`, the printed tip included:
    :func:`forward_model`);
 5. ``tolerance``: Monte Carlo over manufacturing tolerances (:data:`TOLERANCES`), the
    spread of the chosen design's disc radius (one batch solve of every sample's
@@ -48,7 +48,7 @@ from design.atomic import atomic_path, write_text
 from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
-from design.model import DEFAULT_EFFECTS, PRINTED_TIP, RingPairModel
+from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, file_key, index
 from design.units import MM
@@ -456,8 +456,9 @@ STEERABLE_STEP = np.deg2rad(10.0)
 
 def forward_model(study: Study) -> RingPairModel:
     """The model the forward stage re-simulates with: the model for design work
-    (:data:`design.model.DEFAULT_EFFECTS`), with the printed tip where the study has it."""
-    return RingPairModel(DEFAULT_EFFECTS | (study.effects & {PRINTED_TIP}))
+    (:data:`design.model.DEFAULT_EFFECTS`, the printed tip included), whatever the study's
+    own model."""
+    return RingPairModel(DEFAULT_EFFECTS)
 
 
 def steerable_disc(design: Design, model: RingPairModel) -> float:

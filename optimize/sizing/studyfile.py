@@ -18,9 +18,9 @@ description = "optional free text"
 base_design = "embedded"                  # the demonstrator (default), or a design file
                                           # path, relative to the study file
 effects = "none"                          # "none" (baseline), "default" (the model for
-                                          # design work), "all", "default,printed_tip" or
-                                          # a list; near_field, large_deflection, torsion,
-                                          # gravity, printed_tip
+                                          # design work, the printed tip included), "all",
+                                          # "default,torsion" or a list; near_field,
+                                          # large_deflection, torsion, gravity, printed_tip
 objective = "disc_radius"                 # or "area", "reach_ratio", or a weighted table:
 # objective = { disc_radius = 1.0, reach_ratio = 0.5 }  (each term divided by its value
 #                                         # for the base design, then weighted and summed)

@@ -10,7 +10,14 @@ from scipy.optimize import brentq
 
 from design.designfile import default_design
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
-from design.model import DEFAULT_EFFECTS, EFFECTS, RingPairModel, available_effects, parse_effects
+from design.model import (
+    DEFAULT_EFFECTS,
+    EFFECTS,
+    SWITCHES,
+    RingPairModel,
+    available_effects,
+    parse_effects,
+)
 from design.records import Environment
 from design.registry import index
 from design.sections import bending_rigidity, tube_torsional_rigidity
@@ -37,7 +44,8 @@ def test_parse_effects():
     assert parse_effects("all") == frozenset(available_effects()) | {"printed_tip"}
     assert frozenset(available_effects()) == frozenset(EFFECTS)  # printed_tip: a switch
     assert parse_effects("printed_tip,torsion") == {"printed_tip", "torsion"}
-    assert parse_effects("default") == DEFAULT_EFFECTS < frozenset(EFFECTS)
+    assert parse_effects("default") == DEFAULT_EFFECTS < frozenset(SWITCHES)
+    assert "printed_tip" in DEFAULT_EFFECTS  # the model for design work: the tip as built
     assert parse_effects("torsion, gravity") == {"torsion", "gravity"}
     assert parse_effects("default,torsion") == DEFAULT_EFFECTS | {"torsion"}
     with pytest.raises(ValueError, match="unknown model effect 'twist'"):
