@@ -35,6 +35,7 @@ from optimize.sizing.nlp_designs import (
     study_parameters,
 )
 from optimize.sizing.nlp_problem import (
+    EQUILIBRIUM_TOLERANCE,
     GROUPS,
     METRICS,
     Core,
@@ -431,7 +432,7 @@ def _solve_one(
     message = ""
     if not np.all(np.isfinite(w)):
         message = "non-finite solution"
-    elif equilibrium > 1e-6:
+    elif equilibrium > EQUILIBRIUM_TOLERANCE:
         message = f"equilibrium not reached (scaled residual {equilibrium:.3g})"
     elif violation > 0:
         worst = max(states, key=lambda s: -s.margin / s.scale)

@@ -79,6 +79,9 @@ SMOOTH_MAX_SHARPNESS = 200.0
 """Sharpness of the log-sum-exp maximum used for the reach widths, in units of the
 deflection scale (bias at most log(K) / 200 of that scale)."""
 TINY = 1e-20
+EQUILIBRIUM_TOLERANCE = 1e-6
+"""Largest scaled equilibrium residual of an accepted optimum (the unknowns over their
+scale at the start). [-]"""
 """Floor under square roots of squared norms, keeping them smooth at zero. [m or -]"""
 
 METRICS = (
@@ -472,6 +475,13 @@ def _ipopt_options(max_iterations: int, tolerance: float, hessian: str) -> dict[
         "ipopt.max_iter": max_iterations,
         "ipopt.tol": tolerance,
         "ipopt.acceptable_tol": max(tolerance * 100, 1e-6),
+        # IPOPT's defaults accept equilibria violated by 1e-4 (1e-2 at its acceptable
+        # level); an optimum is judged by residuals below EQUILIBRIUM_TOLERANCE
+        "ipopt.constr_viol_tol": EQUILIBRIUM_TOLERANCE / 10,
+        "ipopt.acceptable_constr_viol_tol": EQUILIBRIUM_TOLERANCE / 10,
+        # the free quantities stay within their bounds (by default IPOPT relaxes them by
+        # 1e-8, which a stop's contact stiffness turns into 1e-4 rad of ring angle)
+        "ipopt.bound_relax_factor": 0.0,
         "error_on_fail": False,
     }
 
