@@ -32,8 +32,9 @@ Formulation (one material combination, one start):
   by how hard it is pressed, so a free pre-twist presses the rings against it); rings on
   the wire and the wire in the catheter with clearance (at least
   :data:`design.geometry.WIRE_CLEARANCE`), and the ring bore over the printed pieces' wire
-  bore and passage (``ring_seat``, whatever the model: the study builds the pieces);
-  walls; the largest outer diameter; clearance
+  bore and passage (``ring_seat``); walls; the largest outer diameter (the printed tip's
+  and the catheter's; the printed pieces' rows whatever the model: the study builds
+  them); clearance
   of both rings to the external magnet at every configuration (the model's
   :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
   bounding sphere); the neutral deflection within tolerance (each antiparallel tip's
@@ -116,7 +117,7 @@ GROUPS: dict[str, tuple[float, str, str]] = {
     "wire_in_catheter": (MM, "mm", "catheter bore minus wire OD"),
     "ring_wall": (MM, "mm", "radial wall of the rings"),
     "catheter_wall": (MM, "mm", "radial wall of the catheter"),
-    "ring_diameter": (MM, "mm", "tip outer diameter (printed pieces with printed_tip)"),
+    "ring_diameter": (MM, "mm", "outer diameter of the printed tip"),
     "ring_seat": (MM, "mm", "ring bore minus the printed pieces' wire bore and passage"),
     "catheter_diameter": (MM, "mm", "catheter outer diameter"),
     "epsilon.catheter_outer_diameter": (MM, "mm", "catheter OD (Pareto bound)"),
@@ -312,12 +313,12 @@ def _column(model: RingPairModel) -> ca.Function:
     )
 
 
-def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
+def _design_rows() -> tuple[tuple[str, ...], ca.Function]:
     """The rows that depend on the design alone, and prm -> (those rows, magnet volume,
     external distance, catheter OD). [SI]
 
-    The rings' seat is on the printed pieces (design.mounting) whatever model the study
-    designs with: the study builds those pieces."""
+    The tip's outer diameter and the rings' seat are the printed pieces' (design.mounting)
+    whatever model the study designs with: the study builds those pieces."""
     prm = ca.SX.sym("params", len(NAMES))
     s = Symbols(prm)
     wire = s["wire_outer_diameter"]
@@ -325,14 +326,12 @@ def _design_rows(printed: bool) -> tuple[tuple[str, ...], ca.Function]:
         s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
     )
     distance = external_distance(s["free_length"], s.external_center)
-    # the printed tip's outer diameter (design.mounting) where the model has it
-    tip_diameter = s.tip.outer_diameter if printed else s["magnet_outer_diameter"]
     rows = [
         ("ring_on_wire", s["magnet_inner_diameter"] - wire),
         ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
         ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
         ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
-        ("ring_diameter", tip_diameter),
+        ("ring_diameter", s.tip.outer_diameter),
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
     # the rings rest on the pieces' pocket floors (cad.mounting refuses anything else)
@@ -364,7 +363,7 @@ def core(shape: NlpShape) -> Core:
     )  # fmt: skip
     column = _column(model)
     compiled = compile_functions([column, column.jacobian()])[0]
-    design = _design_rows("printed_tip" in shape.effects)
+    design = _design_rows()
     rows = column_rows(model)
     evaluate, groups, free_groups = _evaluation(shape, cmd, params, compiled, design, rows)
     exact = _evaluation(shape, cmd, params, column, design, rows)[0]

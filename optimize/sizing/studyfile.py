@@ -44,7 +44,7 @@ wire = ["niti"]                           # absent: the tube keeps the base desi
                                           # E, Poisson ratio and density
 
 [constraints]                             # defaults shown
-max_outer_diameter_mm = 4.0               # rings and catheter; default: the base design's
+max_outer_diameter_mm = 4.0               # printed tip and catheter; default: the base's
                                           # largest outer diameter
 wire_clearance_mm = 0.05                  # ring bore and catheter bore >= wire OD + this
                                           # (0.05 at least: design.geometry.WIRE_CLEARANCE)
@@ -96,6 +96,7 @@ from typing import Any
 from design.designfile import DesignError, default_design, load_design, read_input
 from design.geometry import WIRE_CLEARANCE
 from design.model import DEFAULT_EFFECTS, EFFECTS, PRINTED_TIP
+from design.mounting import design_tip_geometry
 from design.records import Design
 from design.registry import PARAMETERS, current, file_key, file_unit
 from design.suggest import did_you_mean
@@ -180,7 +181,7 @@ class Bound:
 class Constraints:
     """Constraint limits, SI (``None``: not imposed).
 
-    max_outer_diameter : rings and catheter. [m]
+    max_outer_diameter : the printed tip (:mod:`design.mounting`) and the catheter. [m]
     wire_clearance : ring and catheter bores minus wire OD, at least. [m]
     min_wall : radial wall of rings and catheter, at least. [m]
     magnet_clearance : tip rings to the external magnet's surface, at least. [m]
@@ -260,8 +261,9 @@ class Study:
 
 
 def base_max_diameter(design: Design) -> float:
-    """The base design's largest outer diameter (rings or catheter). [m]"""
-    return max(design.tip.magnet_outer_diameter, design.robot.catheter.outer_diameter)
+    """The base design's largest outer diameter (its printed tip, :mod:`design.mounting`,
+    or catheter). [m]"""
+    return max(design_tip_geometry(design).outer_diameter, design.robot.catheter.outer_diameter)
 
 
 TOP_KEYS = (

@@ -8,6 +8,7 @@ import math
 import pytest
 
 from design.designfile import default_design, save_design
+from design.mounting import design_tip_geometry
 from optimize.sizing.materials import MATERIALS, material
 from optimize.sizing.studyfile import (
     Study,
@@ -50,7 +51,11 @@ def test_minimal_study_defaults_in_si():
     assert s.free[0].name == "magnet_length"
     assert (s.free[0].low, s.free[0].high) == pytest.approx((0.5e-3, 2e-3))
     lim = s.limits
-    assert lim.max_outer_diameter == pytest.approx(4e-3)  # the demonstrator's rings
+    # the demonstrator's printed tip (its rings are 4 mm across)
+    assert lim.max_outer_diameter == pytest.approx(
+        design_tip_geometry(default_design()).outer_diameter
+    )
+    assert lim.max_outer_diameter > 4e-3
     assert lim.wire_clearance == pytest.approx(0.05e-3)
     assert lim.neutral_tolerance == pytest.approx(1e-3)
     assert lim.stable
