@@ -80,10 +80,10 @@ SMOOTH_MAX_SHARPNESS = 200.0
 """Sharpness of the log-sum-exp maximum used for the reach widths, in units of the
 deflection scale (bias at most log(K) / 200 of that scale)."""
 TINY = 1e-20
+"""Floor under square roots of squared norms, keeping them smooth at zero. [m or -]"""
 EQUILIBRIUM_TOLERANCE = 1e-6
 """Largest scaled equilibrium residual of an accepted optimum (the unknowns over their
 scale at the start). [-]"""
-"""Floor under square roots of squared norms, keeping them smooth at zero. [m or -]"""
 
 METRICS = (
     "disc_radius",
