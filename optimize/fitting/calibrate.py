@@ -18,9 +18,11 @@ Warm starts: the state of each configuration is the load ramp's
 evaluations of a fit the parameters change little, so each evaluation after the first
 takes every row's last state and solves once by Newton at the new parameters, with the
 checks of :func:`design.equilibrium.drive` (contraction, the stable side of the folds,
-clear of the magnet); rows that fail go through the ramp (along a path: the whole path
-again). Rows whose last state came from a fall (``snapped``) are solved afresh. The
-fit's answer is then solved by the ramp itself, and where any fitted row's tip differs
+clear of the magnet); rows that fail, or whose last state came from a fall
+(``snapped``), go through the ramp. Fits along a driven path are not warm-started (a
+row's state there depends on where the path snapped: tried, such fits went elsewhere
+often enough to cost more than they saved). The fit's answer is then solved by the
+ramp itself, and where any fitted row's tip differs
 from the warm-started one by more than WARM_TOLERANCE of its sigma, or has a state in one
 and none in the other, the fit is made again from its start with those rows by the ramp
 (WARM_RETRIES times, then every row by the ramp). The returned result is always the
@@ -384,16 +386,16 @@ class _Problem:
         the checks of :func:`design.equilibrium.drive` (contraction, stable side of the
         folds, clear of the magnet). Rows solved on their own whose solve fails, or that
         have no last state or reached it by a fall (``snapped``), go through the load
-        ramp; along a path (where a row's state depends on the rows before it) any of
-        these sends the whole path to :func:`predict` (None)."""
+        ramp. None along a path (where a row's state depends on the rows before it and
+        on where the path snapped): the path is followed again by :func:`predict`."""
         assert self.states is not None and self.snapped is not None
+        if not self.on_their_own:
+            return None
         applied, d_applied = applied_commands(self.model, p, self.m, self.ordered)
         n, k = self.states.shape
-        # A state the ramp (or the path) reached by a fall may be another one at the new
+        # A state the ramp reached by a fall may be another one at the new
         # parameters even where the old one persists: those rows are solved afresh.
         known = np.isfinite(self.states).all(axis=1) & ~self.snapped & ~self.ramp_only
-        if not self.on_their_own and not known.all():
-            return None
         x = np.full((k, n), np.nan)
         ok = np.zeros(n, bool)
         cols = np.flatnonzero(known)
@@ -401,8 +403,6 @@ class _Problem:
             c = applied[cols].T
             x[:, cols], ok[cols] = drive(self.model, p, self.states[cols].T, c, c)
             self.warm_solves += 1
-        if not self.on_their_own and not ok.all():
-            return None
         nan3 = np.full((n, 3), np.nan)
         eq = Equilibria(
             command=self.m.command.copy(),

@@ -269,9 +269,9 @@ def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, eff
     returned residuals are the ramp's at the estimate."""
     truth = {"wire_torsion_scale": 2.5, "catheter_torsion_scale": 1.5}
     seed = 22
-    m = synthesize(demonstrator, ["torsion"], noise_mm=0.3, seed=seed, params_override=truth)
-    warm = calibrate(demonstrator, m, effects, max_nfev=30)
-    cold = calibrate(demonstrator, m, effects, max_nfev=30, warm_start=False)
+    m = synthesize(demonstrator, ["torsion"], n=24, noise_mm=0.3, seed=seed, params_override=truth)
+    warm = calibrate(demonstrator, m, effects, max_nfev=20)
+    cold = calibrate(demonstrator, m, effects, max_nfev=20, warm_start=False)
     why = f"seed {seed}, {effects}: warm {warm.estimate}, cold {cold.estimate}"
     for name in cold.names:
         assert warm.estimate[name] == pytest.approx(cold.estimate[name], rel=1e-6, abs=1e-9), why
@@ -294,7 +294,7 @@ def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypat
 
     drive = calibration.drive
     monkeypatch.setattr(calibration, "drive", elsewhere)
-    m = synthesize(demonstrator, [], noise_mm=0.3, seed=23)
+    m = synthesize(demonstrator, [], n=24, noise_mm=0.3, seed=23)
     warm = calibrate(demonstrator, m, (), max_nfev=20)
     cold = calibrate(demonstrator, m, (), max_nfev=20, warm_start=False)
     moved = int(np.count_nonzero(m.command[:, 0] > 0))
