@@ -20,7 +20,10 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-CFLAGS = ("-O2", "-shared", "-fPIC")
+CFLAGS = ("-O1", "-shared", "-fPIC")
+"""-O1: on the largest model (all effects, 1 MB of C) it compiles in 9 s against -O2's
+15 s and solves as fast (400 configurations 0.39 s against 0.43 s, a 60-step path 0.10 s
+both); -O0 compiles in 3 s but solves 3x slower."""
 _loaded: dict[str, list[ca.Function]] = {}
 
 
