@@ -78,6 +78,7 @@ from optimize.fitting.sensitivity import (
 __all__ = [
     "BASELINE_FREE",
     "EFFECT_FREE",
+    "EFFECT_SEPARATES",
     "FREE_PARAMETERS",
     "PAPER_FIELD_GRID",
     "PAPER_STIFFNESS_GRID",
@@ -155,6 +156,13 @@ EFFECT_FREE: dict[str, tuple[str, ...]] = {
     "large_deflection": (),
 }
 """Each effect's own parameters, freed with it by default."""
+EFFECT_SEPARATES: dict[str, tuple[str, ...]] = {"gravity": ("external_remanence",)}
+"""Parameters that are not an effect's own but that the effect makes separable: under
+gravity the rod's own weight (a known load) fixes the scale of its compliance, so the
+strength of the field (external remanence, which also absorbs the tip magnets'
+remanence as built) is no longer bound to the bending rigidity. Not freed by default
+(with torsion too the extra freedom slows the search and can lead it astray); the
+diagnosis frees them in a last refit of its final model."""
 
 
 def default_free(effects: Iterable[str] = ()) -> tuple[str, ...]:

@@ -16,6 +16,10 @@ Method (the result format is docs/formats.md's diagnosis JSON):
    and whose cross-validated RMSE falls by more than CV_GAIN; repeat while one is accepted
    and the residual is not yet consistent with the stated noise (chi-square test, when the
    data give sigma).
+   After each acceptance, refit the model with the parameters its effects make
+   separable also free (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`: the field's
+   strength under gravity), kept if that pays by the same two tests (:func:`_refine`);
+   the candidates of later rounds free them too.
 4. Name each accepted cause with its evidence (the residual structure it removes, the
    cross-validated gain, its parameters as the final model estimates them with 1-sigma
    profile-likelihood intervals, :mod:`optimize.fitting.likelihood`), and say whether structure
@@ -49,6 +53,7 @@ from design.sections import tube_torsional_rigidity
 from design.units import DEG, MM
 from optimize.fitting.calibrate import (
     EFFECT_FREE,
+    EFFECT_SEPARATES,
     FREE_PARAMETERS,
     CalibrationResult,
     UnsolvedStart,
@@ -124,11 +129,13 @@ def _fit(
     starts: Sequence[CalibrationResult | Mapping[str, float] | None],
     sigma: float | None,
     max_nfev: int | None = None,
+    free: Sequence[str] = (),
 ) -> Fit:
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
     estimates; a mapping: these values, the others nominal), keep the best, and
-    cross-validate it if ``cv``."""
-    free = default_free(effects)
+    cross-validate it if ``cv``. ``free``: the free parameters (default: the effects'
+    :func:`default_free`)."""
+    free = tuple(free) or default_free(effects)
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
@@ -241,6 +248,55 @@ def _scan(
     if best is None:
         return None
     return {n: float(best[index(n)]) for n in free}
+
+
+def _refine(
+    design: Design,
+    m: Measurements,
+    current: Fit,
+    tried: dict[str, Candidate],
+    *,
+    k: int,
+    seed: int,
+    sigma: float | None,
+    say: Progress,
+) -> Fit:
+    """The final model refitted with the parameters its effects make separable
+    (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`, e.g. the field's strength under
+    gravity) also free, if that pays as an effect must (BIC and cross-validated RMSE);
+    else ``current``. The refit is recorded in ``tried`` either way."""
+    free = current.calibration.names
+    extra = [
+        n for e in sorted(current.effects) for n in EFFECT_SEPARATES.get(e, ()) if n not in free
+    ]
+    if not extra:
+        return current
+    name = f"{current.name} ({', '.join(extra)} freed)"
+    say(f"refitting {name}")
+    try:
+        fit = _fit(
+            design,
+            m,
+            current.effects,
+            k=k,
+            seed=seed,
+            cv=True,
+            starts=[current.calibration],
+            sigma=sigma,
+            free=(*free, *extra),
+        )
+    except Exception as exc:  # reported; the final model stays
+        tried[name] = Candidate(
+            current.effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}"
+        )
+        return current
+    change = fit.bic() - current.bic()
+    before, after = current.cv_rmse_mm, fit.cv_rmse_mm
+    text = f"BIC {change:+.1f}, cross-validated RMSE {before:.3g} -> {after:.3g} mm"
+    better = change < -BIC_DROP and after < (1 - CV_GAIN) * before
+    verdict = f"accepted: {text}" if better else f"rejected: {text}"
+    tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
+    return fit if better else current
 
 
 def _noise_consistent(fit: Fit, m: Measurements) -> bool:
@@ -395,6 +451,7 @@ def power_of_data(
             starts=[final.calibration],
             sigma=sigma,
             max_nfev=SCREEN_EVALUATIONS,
+            free=final.calibration.names,
         )
     except Exception as exc:  # reported; the diagnosis goes on
         return {"margin": math.nan, "could_tell_apart": None, "note": f"failed: {_reason(exc)}"}
@@ -464,7 +521,15 @@ def diagnose(
         position = np.where(np.isfinite(position), position, m.position)
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
-    def attempt(effects: frozenset[str], cv: bool, starts: Starts, **options: int) -> Candidate:
+    def free_for(effects: frozenset[str]) -> tuple[str, ...]:
+        """The free parameters of ``effects`` as a candidate on top of ``current``: their
+        own, and what :func:`_refine` freed in ``current``."""
+        own = default_free(effects)
+        return (*own, *(n for n in current.calibration.names if n not in own))
+
+    def attempt(
+        effects: frozenset[str], cv: bool, starts: Starts, max_nfev: int | None = None
+    ) -> Candidate:
         """A fit of ``effects`` as a candidate on top of ``current`` (failure reported).
         Where the model has no state for most rows at every start (the current model's
         parameters, bent to mimic the effect, can put the robot where the effect leaves
@@ -480,7 +545,8 @@ def diagnose(
                     cv=cv,
                     starts=starts,
                     sigma=sigma,
-                    **options,
+                    max_nfev=max_nfev,
+                    free=free_for(effects),
                 )
             except UnsolvedStart:
                 if None in starts:
@@ -494,7 +560,8 @@ def diagnose(
                     cv=cv,
                     starts=[None],
                     sigma=sigma,
-                    **options,
+                    max_nfev=max_nfev,
+                    free=free_for(effects),
                 )
         except Exception as exc:  # a candidate's failure is reported; the search goes on
             return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
@@ -600,6 +667,7 @@ def diagnose(
                 cv=False,
                 starts=[f.calibration],
                 sigma=sigma,
+                free=current.calibration.names,
             )
             if refit.bic() < current.bic() - 1e-6 and not f.bic() - refit.bic() < -BIC_DROP:
                 tried[f.name] = replace(
@@ -616,6 +684,7 @@ def diagnose(
                     cv=True,
                     starts=[refit.calibration],
                     sigma=sigma,
+                    free=current.calibration.names,
                 )
                 s_current = structure(current)
                 if not current.effects:
@@ -626,6 +695,9 @@ def diagnose(
         steps.append((added, current, f, s_current, s_new))
         current, s_current = f, s_new
         remaining = [r for r in remaining if r not in added]
+        refined = _refine(design, m, current, tried, k=k, seed=seed, sigma=sigma, say=say)
+        if refined is not current:
+            current, s_current = refined, structure(refined)
     if remaining and _noise_consistent(current, m):
         for name in remaining:
             effects = current.effects | {name}
