@@ -250,6 +250,11 @@ def _scan(
     return {n: float(best[index(n)]) for n in free}
 
 
+def _cv_pays(before: float, after: float) -> bool:
+    """The cross-validated RMSE falls by more than CV_GAIN (or becomes defined)."""
+    return after < (1 - CV_GAIN) * before or (not np.isfinite(before) and np.isfinite(after))
+
+
 def _refine(
     design: Design,
     m: Measurements,
@@ -293,7 +298,7 @@ def _refine(
     change = fit.bic() - current.bic()
     before, after = current.cv_rmse_mm, fit.cv_rmse_mm
     text = f"BIC {change:+.1f}, cross-validated RMSE {before:.3g} -> {after:.3g} mm"
-    better = change < -BIC_DROP and after < (1 - CV_GAIN) * before
+    better = change < -BIC_DROP and _cv_pays(before, after)
     verdict = f"accepted: {text}" if better else f"rejected: {text}"
     tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
     return fit if better else current
@@ -600,7 +605,7 @@ def diagnose(
                 continue
             before, after = current.cv_rmse_mm, full.fit.cv_rmse_mm
             text = f"cross-validated RMSE {before:.3g} -> {after:.3g} mm"
-            if after < (1 - CV_GAIN) * before or (not np.isfinite(before) and np.isfinite(after)):
+            if _cv_pays(before, after):
                 accepted = replace(full, verdict=f"accepted: BIC {full.bic_change:+.1f}, {text}")
                 tried[c.name] = accepted
                 for other in round_:  # not decided in this round
