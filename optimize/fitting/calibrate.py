@@ -162,7 +162,7 @@ gravity the rod's own weight (a known load) fixes the scale of its compliance, s
 strength of the field (external remanence, which also absorbs the tip magnets'
 remanence as built) is no longer bound to the bending rigidity. Not freed by default
 (with torsion too the extra freedom slows the search and can lead it astray); the
-diagnosis frees them in a last refit of its final model."""
+diagnosis frees them in a refit once the effect is accepted (its ``_refine``)."""
 
 
 def default_free(effects: Iterable[str] = ()) -> tuple[str, ...]:

@@ -266,7 +266,7 @@ def _refine(
     sigma: float | None,
     say: Progress,
 ) -> Fit:
-    """The final model refitted with the parameters its effects make separable
+    """The current model refitted with the parameters its effects make separable
     (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`, e.g. the field's strength under
     gravity) also free, if that pays as an effect must (BIC and cross-validated RMSE);
     else ``current``. The refit is recorded in ``tried`` either way."""
@@ -539,35 +539,28 @@ def diagnose(
         Where the model has no state for most rows at every start (the current model's
         parameters, bent to mimic the effect, can put the robot where the effect leaves
         no equilibrium, e.g. pulled into a near magnet), it starts from the nominal design."""
+
+        def fit_from(from_: Starts) -> Fit:
+            return _fit(
+                design,
+                m,
+                effects,
+                k=k,
+                seed=seed,
+                cv=cv,
+                starts=from_,
+                sigma=sigma,
+                max_nfev=max_nfev,
+                free=free_for(effects),
+            )
+
         try:
             try:
-                f = _fit(
-                    design,
-                    m,
-                    effects,
-                    k=k,
-                    seed=seed,
-                    cv=cv,
-                    starts=starts,
-                    sigma=sigma,
-                    max_nfev=max_nfev,
-                    free=free_for(effects),
-                )
+                f = fit_from(starts)
             except UnsolvedStart:
                 if None in starts:
                     raise
-                f = _fit(
-                    design,
-                    m,
-                    effects,
-                    k=k,
-                    seed=seed,
-                    cv=cv,
-                    starts=[None],
-                    sigma=sigma,
-                    max_nfev=max_nfev,
-                    free=free_for(effects),
-                )
+                f = fit_from([None])
         except Exception as exc:  # a candidate's failure is reported; the search goes on
             return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
         return Candidate(effects, current.name, f, f.bic() - current.bic(), "")
