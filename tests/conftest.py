@@ -14,10 +14,16 @@ SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_model_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
-    """Keep compiled models out of the user's cache unless RINGPAIR_CACHE is set (CI sets
-    it to reuse compilations across runs)."""
+    """Keep compiled models out of the user's cache unless RINGPAIR_CACHE is set (to reuse
+    compilations across runs). Parallel workers (pytest-xdist) share one cache, beside their
+    own temporary folders, so that each model is compiled once per run."""
     if "RINGPAIR_CACHE" not in os.environ:
-        os.environ["RINGPAIR_CACHE"] = str(tmp_path_factory.mktemp("ringpair-cache"))
+        root = tmp_path_factory.getbasetemp()
+        if os.environ.get("PYTEST_XDIST_WORKER"):
+            root = root.parent
+        cache = root / "ringpair-cache"
+        cache.mkdir(exist_ok=True)
+        os.environ["RINGPAIR_CACHE"] = str(cache)
 
 
 @pytest.fixture()

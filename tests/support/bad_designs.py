@@ -20,7 +20,14 @@ def edited(doc: dict, path: str, value) -> dict:
     return doc
 
 
-DELETE = object()
+class _Delete:
+    """The key is removed (its repr names the test case the same in every process)."""
+
+    def __repr__(self) -> str:
+        return "<deleted>"
+
+
+DELETE = _Delete()
 
 # (key path, bad value, words the message must contain)
 BAD_VALUES = [
