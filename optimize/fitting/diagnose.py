@@ -602,18 +602,36 @@ def diagnose(
                 starts.append({**current.calibration.estimate, **extra})
         return starts
 
+    def cross_validated(c: Candidate) -> Candidate:
+        assert c.fit is not None
+        say(f"cross-validating {c.name}")
+        return attempt(c.effects, True, [c.fit.calibration])
+
     def decide(round_: list[Candidate]) -> Candidate | None:
         """Cross-validate the candidates in order of BIC; the first whose BIC falls by
-        more than BIC_DROP and whose cross-validated RMSE by more than CV_GAIN."""
-        for c in sorted(round_, key=_bic_order):
+        more than BIC_DROP and whose cross-validated RMSE by more than CV_GAIN. Where
+        the current model leaves rows without a state, every candidate that solves them
+        drops the BIC by -inf, which cannot rank them: those are all cross-validated and
+        taken in order of their held-out error."""
+        order = sorted(round_, key=_bic_order)
+        full_of: dict[str, Candidate] = {}
+        infinite = [c for c in order if c.fit is not None and c.bic_change == -math.inf]
+        if len(infinite) > 1:
+            full_of = {c.name: cross_validated(c) for c in infinite}
+
+            def held_out(c: Candidate) -> float:
+                f = full_of[c.name].fit
+                return f.cv_rmse_mm if f is not None and np.isfinite(f.cv_rmse_mm) else math.inf
+
+            order = sorted(infinite, key=held_out) + [c for c in order if c.name not in full_of]
+        for c in order:
             if c.fit is None:
                 tried[c.name] = c
                 continue
             if not c.bic_change < -BIC_DROP:
                 tried[c.name] = replace(c, verdict=_bic_verdict(c))
                 continue
-            say(f"cross-validating {c.name}")
-            full = attempt(c.effects, True, [c.fit.calibration])
+            full = full_of.get(c.name) or cross_validated(c)
             if full.fit is None or not full.bic_change < -BIC_DROP:
                 tried[c.name] = replace(full, verdict=full.verdict or _bic_verdict(full))
                 continue
@@ -624,9 +642,13 @@ def diagnose(
                 tried[c.name] = accepted
                 for other in round_:  # not decided in this round
                     if other.name not in tried or tried[other.name].verdict == "":
-                        tried[other.name] = replace(
-                            other, verdict=f"not decided: {c.name} was accepted first"
-                        )
+                        why = f"not decided: {c.name} was accepted first"
+                        held = full_of.get(other.name)
+                        if held is not None and held.fit is not None:
+                            why += f" (cross-validated RMSE {held.fit.cv_rmse_mm:.3g} mm)"
+                        elif held is not None:
+                            why += f" ({held.verdict})"
+                        tried[other.name] = replace(held or other, verdict=why)
                 return accepted
             tried[c.name] = replace(
                 full,
