@@ -387,11 +387,9 @@ def _reason(exc: Exception) -> str:
 
 
 def _bic_order(c: Candidate) -> tuple[float, float]:
-    """Most negative BIC change first; failed fits (NaN) last. Where the current model
-    leaves rows without a state, its BIC is infinite and every candidate that solves
-    them drops it by -inf: those are ordered by their own BIC (benchmark seed [2, 12, 0],
-    hysteresis with large deflection: by name order near_field was cross-validated and
-    accepted first, and large_deflection never decided)."""
+    """Most negative BIC change first; failed fits (NaN) last; candidates that all drop
+    an infinite BIC (the current model leaves rows without a state) by their own BIC
+    (``decide`` then ranks them by their held-out error)."""
     if np.isnan(c.bic_change) or c.fit is None:
         return (math.inf, math.inf)
     return (c.bic_change, c.fit.bic())
