@@ -132,15 +132,15 @@ def planted_cv(case: Planted, seed: int) -> float:
             starts=[dict(case.truth)],
             sigma=None,
         )
-    except Exception:  # the floor is then unknown; the diagnosis' row stands
+    except Exception:  # the reference is then unknown; the diagnosis' row stands
         return math.nan
     return fit.cv_rmse_mm / noise_rms(case)
 
 
 def score(
-    result: Diagnosis, case: Planted, seconds: float, cpu: float, floor: float
+    result: Diagnosis, case: Planted, seconds: float, cpu: float, reference: float
 ) -> dict[str, object]:
-    """One diagnosis' figures (a JSON-able row); ``floor``: :func:`planted_cv`."""
+    """One diagnosis' figures (a JSON-able row); ``reference``: :func:`planted_cv`."""
     named = {c.name for c in result.causes}
     return {
         "planted": case.name,
@@ -151,7 +151,7 @@ def score(
         "right": named == set(case.planted),
         "false": sorted(named - case.planted),
         "cv_over_noise": result.final.cv_rmse_mm / noise_rms(case),
-        "planted_cv_over_noise": floor,
+        "planted_cv_over_noise": reference,
         "recovery": recovery(result, case),
         "estimates": {
             n: [result.final.calibration.estimate[n], identifiable_truth(case, n)]
@@ -192,11 +192,11 @@ def summary(rows: list[dict], label: str) -> str:
         if np.isfinite(r.get("planted_cv_over_noise", math.nan))
     ]
     if pairs:
-        floors = np.array(pairs)
+        refs = np.array(pairs)
         parts.append(
-            f"(planted model from the truth: median {np.median(floors[:, 1]):.2f} max "
-            f"{np.max(floors[:, 1]):.2f}; within 1.1x of it "
-            f"{np.sum(floors[:, 0] <= 1.1 * floors[:, 1])}/{len(floors)})"
+            f"(planted model from the truth: median {np.median(refs[:, 1]):.2f} max "
+            f"{np.max(refs[:, 1]):.2f}; within 1.1x of it "
+            f"{np.sum(refs[:, 0] <= 1.1 * refs[:, 1])}/{len(refs)})"
         )
     if rec:
         rec_a = np.asarray(rec)
