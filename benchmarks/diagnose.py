@@ -18,13 +18,18 @@ given only the nominal design file and the data. Prints, per planted set and ove
   truth's side) of the named planted effects' parameters: median, share within 2 (a
   torsion factor is compared as the true GJ over the nominal one: the planted factor
   times the tube's modulus as built over nominal);
-- time: median seconds per diagnosis (goal <= 30 s), and the CPU seconds of the process
-  (all its threads; less sensitive to a shared machine's load than the wall time). Every
+- time: median seconds per diagnosis (goal <= 30 s) on the worker processes
+  :mod:`optimize.fitting.workers` gives it (``RINGPAIR_WORKERS``, default one per core),
+  and the CPU seconds of the process and its workers (all threads; less sensitive to a
+  shared machine's load than the wall time). ``--serial`` also runs each diagnosis in one
+  process, the baseline of that speed-up, prints the ratio and checks that both give the
+  same diagnosis. Every
   model a diagnosis can fit is built first (:func:`warm_up`; its time is printed): the
   first use of a model on a machine compiles it to native code (10-20 s each, then cached
   on disk), which is not the diagnosis' cost.
 
-    python benchmarks/diagnose.py --random 2 [--seed 0] [--only torsion,null] [--jsonl out.jsonl]
+    python benchmarks/diagnose.py --random 2 [--seed 0] [--only torsion,null] [--serial]
+        [--jsonl out.jsonl]
     python benchmarks/diagnose.py --summary out.jsonl   # the figures of earlier rows
 
 The baseline it is judged against is the calibrated paper model the diagnosis starts
@@ -37,6 +42,8 @@ import argparse
 import itertools
 import json
 import math
+import os
+import resource
 import sys
 import time
 import traceback
@@ -50,12 +57,11 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 
-from design.equilibrium import kernels  # noqa: E402
-from design.model import model_for  # noqa: E402
 from optimize.fitting.calibrate import EFFECT_FREE  # noqa: E402
 from optimize.fitting.diagnose import Diagnosis, _fit, diagnose, report_key  # noqa: E402
 from optimize.fitting.planted import PLANTED_SETS, Planted, draw_planted  # noqa: E402
-from optimize.fitting.sensitivity import sensitivity_function  # noqa: E402
+from optimize.fitting.sensitivity import built_model  # noqa: E402
+from optimize.fitting.workers import worker_count  # noqa: E402
 
 
 def warm_up() -> tuple[int, float]:
@@ -67,10 +73,32 @@ def warm_up() -> tuple[int, float]:
     names = list(EFFECT_FREE)
     sets = [frozenset(c) for r in range(len(names) + 1) for c in itertools.combinations(names, r)]
     for effects in sets:
-        model = model_for(effects)
-        kernels(model)
-        sensitivity_function(model)
+        built_model(effects)
     return len(sets), time.perf_counter() - t0
+
+
+def timed(case: Planted, j: int, workers: int | None = None) -> tuple[Diagnosis, float, float]:
+    """Diagnose ``case`` (fold seed ``j``) on ``workers`` processes (None: the default,
+    :mod:`optimize.fitting.workers`); returns it with its wall and CPU seconds (this
+    process and its workers)."""
+    saved = os.environ.get("RINGPAIR_WORKERS")
+    if workers is not None:
+        os.environ["RINGPAIR_WORKERS"] = str(workers)
+    try:
+        t0, c0 = time.perf_counter(), cpu_seconds()
+        result = diagnose(case.design, case.measurements, seed=j)
+        return result, time.perf_counter() - t0, cpu_seconds() - c0
+    finally:
+        if saved is None:
+            os.environ.pop("RINGPAIR_WORKERS", None)
+        else:
+            os.environ["RINGPAIR_WORKERS"] = saved
+
+
+def cpu_seconds() -> float:
+    """CPU seconds of this process (all threads) and of its finished worker processes."""
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + children.ru_utime + children.ru_stime
 
 
 MODULUS_OF = {
@@ -166,6 +194,17 @@ def score(
     }
 
 
+def same(a: Diagnosis, b: Diagnosis) -> bool:
+    """Whether two diagnoses of the same data say the same (their JSON but the time)."""
+
+    def text(d: Diagnosis) -> str:
+        doc = d.to_json()
+        doc.pop("time_s", None)
+        return json.dumps(doc, sort_keys=True, default=str)
+
+    return text(a) == text(b)
+
+
 def summary(rows: list[dict], label: str) -> str:
     """One line of figures over ``rows``."""
     ok = [r for r in rows if "error" not in r]
@@ -206,6 +245,17 @@ def summary(rows: list[dict], label: str) -> str:
     cpu = [r["cpu_seconds"] for r in ok if "cpu_seconds" in r]
     if cpu:
         parts.append(f"CPU median {np.median(cpu):.0f} s")
+    serial = [
+        (r["serial_seconds"], r["seconds"], r["same_as_serial"])
+        for r in ok
+        if "serial_seconds" in r
+    ]
+    if serial:
+        a = np.array(serial)
+        parts.append(
+            f"one process: median {np.median(a[:, 0]):.0f} s, speed-up median "
+            f"{np.median(a[:, 0] / a[:, 1]):.2f}x, same result {int(a[:, 2].sum())}/{len(a)}"
+        )
     if len(ok) < len(rows):
         parts.append(f"FAILED {len(rows) - len(ok)}")
     return f"{label:<28s}" + ", ".join(parts)
@@ -219,6 +269,12 @@ def main() -> None:
     ap.add_argument("--jsonl", type=Path, help="append one JSON row per diagnosis here")
     ap.add_argument(
         "--summary", type=Path, help="only print the figures of the rows of this --jsonl file"
+    )
+    ap.add_argument(
+        "--serial",
+        action="store_true",
+        help="also run each diagnosis in one process (the baseline of the worker processes' "
+        "speed-up) and check it gives the same result",
     )
     args = ap.parse_args()
     if args.summary:
@@ -238,7 +294,7 @@ def main() -> None:
         count, seconds = warm_up()
     console.print(
         f"{count} models built in {seconds:.0f} s (compiling those new to this machine); "
-        "not counted in the times below"
+        f"not counted in the times below; {worker_count()} worker process(es) per diagnosis"
     )
     rows: dict[str, list[dict]] = {}
     with Progress(console=console) as bar:
@@ -251,12 +307,15 @@ def main() -> None:
                 bar.update(task, description=f"{label} #{j + 1}: drawing")
                 case = draw_planted(rng, planted)
                 bar.update(task, description=f"{label} #{j + 1}: diagnosing")
-                t0, c0 = time.perf_counter(), time.process_time()
                 try:
-                    result = diagnose(case.design, case.measurements, seed=j)
-                    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+                    result, seconds, cpu = timed(case, j)
                     bar.update(task, description=f"{label} #{j + 1}: the planted model")
                     row = score(result, case, seconds, cpu, planted_cv(case, j))
+                    if args.serial:
+                        bar.update(task, description=f"{label} #{j + 1}: in one process")
+                        alone, serial, _ = timed(case, j, workers=1)
+                        row["serial_seconds"] = serial
+                        row["same_as_serial"] = same(alone, result)
                 except Exception as exc:  # the benchmark reports a failure and goes on
                     row = {
                         "planted": label,
@@ -274,6 +333,13 @@ def main() -> None:
                         f"{row['cv_over_noise']:.2f} (planted model "
                         f"{row['planted_cv_over_noise']:.2f}), {row['seconds']:.0f} s "
                         f"({row['cpu_seconds']:.0f} s CPU)"
+                        + (
+                            f"; in one process {row['serial_seconds']:.0f} s "
+                            f"({row['serial_seconds'] / row['seconds']:.2f}x), "
+                            f"{'the same' if row['same_as_serial'] else 'DIFFERENT'} result"
+                            if "serial_seconds" in row
+                            else ""
+                        )
                     )
                 )
                 bar.console.print(f"{case.describe()}: {mark}")

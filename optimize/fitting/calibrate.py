@@ -74,6 +74,7 @@ from optimize.fitting.sensitivity import (
     sensitivities,
     sensitivity_function,
 )
+from optimize.fitting.workers import parallel_map
 
 __all__ = [
     "BASELINE_FREE",
@@ -98,6 +99,7 @@ __all__ = [
     "predict",
     "prediction_sensitivities",
     "row_sigma",
+    "straight_miss",
     "sensitivities",
     "sensitivity_function",
     "two_factor_parameters",
@@ -281,6 +283,14 @@ class CalibrationResult:
         return rows
 
 
+def straight_miss(params: np.ndarray, m: Measurements) -> np.ndarray:
+    """What a row without an equilibrium costs: the straight, unloaded robot's tip (at
+    ``params``' free length) minus each measured position, shape (N, 3), zero where not
+    measured. The fit's objective and the diagnosis' misfit use it alike. [m]"""
+    rest = rest_position(params[index("free_length")])
+    return np.where(m.measured, rest - m.position, 0.0)
+
+
 class _Problem:
     """Residuals and Jacobian in fit units u, with the last solve cached (least_squares
     asks for the Jacobian at the point whose residuals it has just computed)."""
@@ -315,10 +325,9 @@ class _Problem:
             np.isfinite(m.tip_angles) & fit[:, None] if tip_angles else np.zeros((len(m), 2), bool)
         )
         self.sigma = sigma
-        rest = rest_position(base[index("free_length")])
         # A row without an equilibrium costs what the straight robot would (a plateau the
         # trust region steps back from).
-        self.fail_offset = np.where(m.measured, rest - m.position, 0.0)
+        self.fail_offset = straight_miss(base, m)
         self.evaluations = 0
         self._key: bytes | None = None
         self._cache: tuple[np.ndarray, np.ndarray, Prediction] | None = None
@@ -737,10 +746,12 @@ def cross_validate(
     folds = configuration_folds(m, k, seed)
     errors = np.full(len(m), np.nan)
     fold_rmse = np.full(k, np.nan)
-    for f in range(k):
-        train = folds != f
-        res = calibrate(design, m, effects, free, rows=train, **options)  # type: ignore[arg-type]
-        held = ~train
+    fits = parallel_map(
+        lambda f: calibrate(design, m, effects, free, rows=folds != f, **options),  # type: ignore[arg-type]
+        range(k),
+    )
+    for f, res in enumerate(fits):
+        held = folds == f
         errors[held] = res.errors[held]
         e = res.errors[held]
         e = e[np.isfinite(e)]

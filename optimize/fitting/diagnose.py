@@ -62,6 +62,7 @@ from optimize.fitting.calibrate import (
     default_free,
     predict,
     row_sigma,
+    straight_miss,
 )
 from optimize.fitting.diagnosis import (
     Candidate,
@@ -73,12 +74,14 @@ from optimize.fitting.diagnosis import (
 )
 from optimize.fitting.likelihood import Interval, profile_intervals
 from optimize.fitting.measurements import Measurements
+from optimize.fitting.sensitivity import built_model
 from optimize.fitting.structure import (
     STRUCTURE_P,
     ResidualDependence,
     features,
     residual_structure,
 )
+from optimize.fitting.workers import parallel_map
 
 BIC_DROP = 10.0
 """Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
@@ -189,7 +192,8 @@ def _fit(
             fits.append(fit(initial, "driven"))
     if not fits:
         raise skipped[0]
-    cal, path = min(fits, key=lambda f: f[0].chi2 if f[0].unconverged == 0 else math.inf)
+    # A fit that solves every row first; among fits that all leave rows, the least misfit.
+    cal, path = min(fits, key=lambda f: (f[0].unconverged > 0, f[0].chi2))
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
         start = _scan(model, m, cal, free)
         if start is not None:
@@ -198,9 +202,14 @@ def _fit(
                 cal, path = scanned, "driven"
     options["ordered"] = path
     initial = {n: cal.estimate[n] for n in free}
-    unsolved = int(np.count_nonzero(~np.isfinite(cal.errors)))
+    solved = np.isfinite(cal.errors)
+    unsolved = int(np.count_nonzero(~solved))
     coordinates = int(m.measured.sum())
-    rss = math.inf if unsolved else float(np.nansum(cal.residuals**2))
+    # Rows without a state cost what the fit's objective charged them: the straight robot's
+    # miss. An infinite misfit would make every model that solves them win by -inf BIC,
+    # whatever it does on the others.
+    rss = float(np.nansum(cal.residuals[solved] ** 2))
+    rss += float(np.sum(straight_miss(cal.params, m)[~solved] ** 2))
     cv_rmse = math.nan
     if cv:
         # Each fold is kept near the fit of all the data (FOLD_ANCHOR).
@@ -386,19 +395,16 @@ def _reason(exc: Exception) -> str:
     return f"{type(exc).__name__}: {text}"
 
 
-def _bic_order(c: Candidate) -> tuple[float, float]:
-    """Most negative BIC change first; failed fits (NaN) last; candidates that all drop
-    an infinite BIC (the current model leaves rows without a state) by their own BIC
-    (``decide`` then ranks them by their held-out error)."""
-    if np.isnan(c.bic_change) or c.fit is None:
-        return (math.inf, math.inf)
-    return (c.bic_change, c.fit.bic())
+def _bic_order(c: Candidate) -> float:
+    """Most negative BIC change first; failed fits (NaN) last."""
+    return math.inf if np.isnan(c.bic_change) or c.fit is None else c.bic_change
 
 
 def _bic_verdict(c: Candidate) -> str:
+    text = f"rejected: BIC {c.bic_change:+.1f} on top of {c.on_top_of}, not below -{BIC_DROP:g}"
     if c.fit is not None and c.fit.unsolved:
-        return f"rejected: the model leaves {c.fit.unsolved} row(s) without an equilibrium"
-    return f"rejected: BIC {c.bic_change:+.1f} on top of {c.on_top_of}, not below -{BIC_DROP:g}"
+        text += f" (it leaves {c.fit.unsolved} row(s) without an equilibrium)"
+    return text
 
 
 def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> str:
@@ -600,6 +606,19 @@ def diagnose(
                 starts.append({**current.calibration.estimate, **extra})
         return starts
 
+    def screen(added: list[frozenset[str]]) -> list[Candidate]:
+        """Screening fits of each of ``added`` on top of ``current``, in parallel
+        (:mod:`optimize.fitting.workers`); each is entered in ``tried``."""
+        effects = [current.effects | a for a in added]
+        for e in effects:
+            built_model(e)
+        found = parallel_map(
+            lambda e: attempt(e, False, starts_for(e), max_nfev=SCREEN_EVALUATIONS), effects
+        )
+        for c in found:
+            tried[c.name] = c
+        return found
+
     def cross_validated(c: Candidate) -> Candidate:
         assert c.fit is not None
         say(f"cross-validating {c.name}")
@@ -607,29 +626,15 @@ def diagnose(
 
     def decide(round_: list[Candidate]) -> Candidate | None:
         """Cross-validate the candidates in order of BIC; the first whose BIC falls by
-        more than BIC_DROP and whose cross-validated RMSE by more than CV_GAIN. Where
-        the current model leaves rows without a state, every candidate that solves them
-        drops the BIC by -inf, which cannot rank them: those are all cross-validated and
-        taken in order of their held-out error."""
-        order = sorted(round_, key=_bic_order)
-        full_of: dict[str, Candidate] = {}
-        infinite = [c for c in order if c.fit is not None and c.bic_change == -math.inf]
-        if len(infinite) > 1:
-            full_of = {c.name: cross_validated(c) for c in infinite}
-
-            def held_out(c: Candidate) -> float:
-                f = full_of[c.name].fit
-                return f.cv_rmse_mm if f is not None and np.isfinite(f.cv_rmse_mm) else math.inf
-
-            order = sorted(infinite, key=held_out) + [c for c in order if c.name not in full_of]
-        for c in order:
+        more than BIC_DROP and whose cross-validated RMSE by more than CV_GAIN."""
+        for c in sorted(round_, key=_bic_order):
             if c.fit is None:
                 tried[c.name] = c
                 continue
             if not c.bic_change < -BIC_DROP:
                 tried[c.name] = replace(c, verdict=_bic_verdict(c))
                 continue
-            full = full_of.get(c.name) or cross_validated(c)
+            full = cross_validated(c)
             if full.fit is None or not full.bic_change < -BIC_DROP:
                 tried[c.name] = replace(full, verdict=full.verdict or _bic_verdict(full))
                 continue
@@ -640,13 +645,9 @@ def diagnose(
                 tried[c.name] = accepted
                 for other in round_:  # not decided in this round
                     if other.name not in tried or tried[other.name].verdict == "":
-                        why = f"not decided: {c.name} was accepted first"
-                        held = full_of.get(other.name)
-                        if held is not None and held.fit is not None:
-                            why += f" (cross-validated RMSE {held.fit.cv_rmse_mm:.3g} mm)"
-                        elif held is not None:
-                            why += f" ({held.verdict})"
-                        tried[other.name] = replace(held or other, verdict=why)
+                        tried[other.name] = replace(
+                            other, verdict=f"not decided: {c.name} was accepted first"
+                        )
                 return accepted
             tried[c.name] = replace(
                 full,
@@ -667,27 +668,19 @@ def diagnose(
     screened: dict[str, dict[str, float]] = {}  # each effect's own estimates, last screen
     refit_from: set[str] = set()  # models whose estimates the current model was refitted from
     while remaining and not _noise_consistent(current, m):
-        singles = []
-        for name in remaining:
-            say(f"testing {name} on top of {current.name}")
-            effects = current.effects | {name}
-            c = attempt(effects, False, starts_for(effects), max_nfev=SCREEN_EVALUATIONS)
-            tried[c.name] = c
+        say(f"testing {', '.join(remaining)} on top of {current.name}")
+        singles = screen([frozenset({name}) for name in remaining])
+        for name, c in zip(remaining, singles, strict=True):
             if c.fit is not None:
                 screened[name] = {n: c.fit.calibration.estimate[n] for n in EFFECT_FREE[name]}
-            singles.append(c)
         accepted = decide(singles)
         if accepted is None and len(remaining) > 1 and unexplained_left(s_current, current):
             # Structure remains and no single addition pays: effects that only together
             # explain it (each alone bends the others' parameters to mimic it).
-            pairs = []
-            for pair in itertools.combinations(remaining, 2):
-                effects = current.effects | set(pair)
-                say(f"testing {' + '.join(pair)} together on top of {current.name}")
-                c = attempt(effects, False, starts_for(effects), max_nfev=SCREEN_EVALUATIONS)
-                tried[c.name] = c
-                pairs.append(c)
-            accepted = decide(pairs)
+            pairs = [frozenset(pair) for pair in itertools.combinations(remaining, 2)]
+            names = ", ".join(" + ".join(sorted(p)) for p in pairs)
+            say(f"testing {names} on top of {current.name}")
+            accepted = decide(screen(pairs))
         if accepted is None or accepted.fit is None:
             break
         f = accepted.fit
@@ -773,10 +766,12 @@ def diagnose(
                 cause = replace(cause, evidence=evidence)
             causes.append(cause)
 
-    power: dict[str, dict[str, object]] = {}
+    if remaining:
+        say("power of the data for " + ", ".join(remaining))
     for name in remaining:
-        say(f"power of the data for {name}")
-        power[name] = power_of_data(design, m, current, name, sigma)
+        built_model(current.effects | {name})
+    found = parallel_map(lambda e: power_of_data(design, m, current, e, sigma), remaining)
+    power = dict(zip(remaining, found, strict=True))
     return Diagnosis(
         baseline=baseline,
         final=current,

@@ -28,7 +28,8 @@ class Fit:
     ordered: bool | Literal["driven"] = False
     """How the fit solved the configurations (see :func:`optimize.fitting.calibrate.predict`)."""
     unsolved: int = 0
-    """Rows the model could not solve at the estimate (each makes ``rss`` infinite)."""
+    """Rows the model could not solve at the estimate (each adds to ``rss`` the straight
+    robot's miss, :func:`optimize.fitting.calibrate.straight_miss`)."""
 
     @property
     def name(self) -> str:
@@ -109,7 +110,7 @@ NULL_REASONS = {
     "cv_rmse_mm": "not cross-validated (rejected on its BIC first), or no held-out row solved",
     "rmse_mm": "no row solved",
     "max_abs_mm": "no row solved",
-    "bic": "the model leaves rows unsolved (an infinite misfit) or fits them exactly",
+    "bic": "the fit failed (see the verdict), or it fits the data exactly (a zero misfit)",
     "bic_change": "a BIC is undefined (see the candidate's verdict)",
     "uncertainty": "the data do not determine this parameter (it trades off with others)",
     "interval": "the profile likelihood could not be evaluated",

@@ -31,6 +31,7 @@ import numpy as np
 from design.records import Design
 from optimize.fitting.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
 from optimize.fitting.measurements import Measurements
+from optimize.fitting.workers import parallel_map
 
 TOLERANCE = 0.05
 """An interval end is found when |r| is within this of 1. [-]"""
@@ -85,10 +86,14 @@ def profile_intervals(
     """
     _check(fit)
     free = fit.names
-    out = {}
+    names = list(names)
     for name in names:
         if name not in free:
             raise ValueError(f"{name!r} is not a free parameter of the fit ({list(free)})")
+
+    def end(job: tuple[str, float]) -> tuple[float, int]:
+        """One end of ``name``'s interval (``sign`` -1: the lower) and the fits it took."""
+        name, sign = job
         rest = tuple(n for n in free if n != name)
         lo, hi = _range(name, fit.nominal[name])
         u_hat = _to_u(name, fit.estimate[name])
@@ -96,14 +101,14 @@ def profile_intervals(
         spec = FREE_PARAMETERS[name]
         se = fit.standard_error[name] / (fit.estimate[name] if spec.kind == "log" else spec.step)
         se = se if np.isfinite(se) and se > 0 else spec.prior
-        fits = 0
-        ends = []
-        for sign, bound in ((-1.0, lo), (1.0, hi)):
-            end, n = _end(design, m, fit, name, rest, u_hat, sign, se, bound, ordered, sigma)
-            ends.append(end)
-            fits += n
-        out[name] = Interval(ends[0], ends[1], fits)
-    return out
+        bound = lo if sign < 0 else hi
+        return _end(design, m, fit, name, rest, u_hat, sign, se, bound, ordered, sigma)
+
+    ends = parallel_map(end, [(name, sign) for name in names for sign in (-1.0, 1.0)])
+    return {
+        name: Interval(lower[0], upper[0], lower[1] + upper[1])
+        for name, lower, upper in zip(names, ends[::2], ends[1::2], strict=True)
+    }
 
 
 def profile_sigma(

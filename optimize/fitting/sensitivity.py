@@ -21,9 +21,9 @@ import casadi as ca
 import numpy as np
 
 from design.compiled import compile_function, evaluate_columns
-from design.equilibrium import Equilibria, solve_equilibria, solve_sequence
+from design.equilibrium import Equilibria, kernels, solve_equilibria, solve_sequence
 from design.friction import play, play_step
-from design.model import RingPairModel
+from design.model import RingPairModel, model_for
 from design.registry import FITTED, NAMES, index
 from optimize.fitting.measurements import Measurements
 
@@ -75,6 +75,16 @@ def sensitivity_function(model: RingPairModel) -> ca.Function:
     if fn.n_instructions() > COMPILE_LIMIT:
         return fn
     return compile_function(fn)
+
+
+def built_model(effects: frozenset[str]) -> RingPairModel:
+    """:func:`design.model.model_for` ``effects`` with its compiled solver and sensitivity
+    functions built now, in this process (worker processes forked after this inherit
+    them instead of each building its own, :mod:`optimize.fitting.workers`)."""
+    model = model_for(effects)
+    kernels(model)
+    sensitivity_function(model)
+    return model
 
 
 @lru_cache(maxsize=64)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -62,6 +63,12 @@ REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
     show_default=True,
     help="Refuse data with more rows than this (the time is estimated up front).",
 )
+@click.option(
+    "--workers",
+    type=click.IntRange(1, None),
+    help="Processes for the independent fits (candidates, folds, intervals) "
+    "[default: $RINGPAIR_WORKERS, else one per core].",
+)
 def diagnose(
     data: Path,
     design_path: Path | None,
@@ -70,6 +77,7 @@ def diagnose(
     folds: int,
     seed: int,
     max_rows: int,
+    workers: int | None,
 ) -> None:
     """What the simulation gets wrong on measured DATA, the physical cause, and the gain.
 
@@ -80,7 +88,15 @@ def diagnose(
     on stderr as it starts, with the time so far.
     """
     from optimize.fitting.diagnose import diagnose as run_diagnosis
+    from optimize.fitting.workers import WORKERS_VARIABLE, worker_count
     from ringpair.diagnosis_report import write_report
+
+    if workers is not None:
+        os.environ[WORKERS_VARIABLE] = str(workers)
+    try:
+        worker_count()
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
 
     d, m = measured_data(data, design_path)
     seconds = SECONDS[0] + SECONDS[1] * len(m)

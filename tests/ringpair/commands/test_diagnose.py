@@ -51,3 +51,15 @@ def test_diagnose_bad_folds_is_a_clear_error(tmp_path, run):
     assert run("synth", "--n", "20", "--out", str(data)).exit_code == 0
     result = CliRunner().invoke(cli, ["diagnose", str(data), "--folds", "1"])
     assert result.exit_code == 2 and "--folds" in result.output
+
+
+def test_diagnose_bad_worker_count_is_a_clear_error(tmp_path, run, monkeypatch):
+    data = tmp_path / "bench"
+    assert run("synth", "--n", "20", "--out", str(data)).exit_code == 0
+    result = CliRunner().invoke(cli, ["diagnose", str(data), "--workers", "0"])
+    assert result.exit_code == 2 and "--workers" in result.output
+    monkeypatch.setenv("RINGPAIR_WORKERS", "all")
+    result = CliRunner().invoke(cli, ["diagnose", str(data)])
+    assert result.exit_code != 0 and isinstance(result.exception, SystemExit), result.output
+    assert "RINGPAIR_WORKERS must be a whole number" in result.output
+    assert "Traceback" not in result.output
