@@ -251,19 +251,19 @@ def _scan(
         r = (position - m.position)[measured]
         return float(np.sum(r**2)) if np.isfinite(r).all() else math.inf
 
-    best, best_value = None, misfit(cal.params)
+    points = [cal.params]
     for group in groups:
         for factor in SCAN_FACTORS:
             params = cal.params.copy()
             for name in group:
                 spec = FREE_PARAMETERS[name]
                 params[index(name)] = np.clip(params[index(name)] * factor, spec.lower, spec.upper)
-            value = misfit(params)
-            if value < best_value:
-                best, best_value = params, value
-    if best is None:
+            points.append(params)
+    values = parallel_map(misfit, points)
+    best = int(np.argmin(values))  # the first of equals; 0: the estimate itself
+    if best == 0 or not values[best] < values[0]:
         return None
-    return {n: float(best[index(n)]) for n in free}
+    return {n: float(points[best][index(n)]) for n in free}
 
 
 def _cv_pays(before: float, after: float) -> bool:
