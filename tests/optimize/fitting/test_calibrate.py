@@ -23,6 +23,7 @@ from optimize.fitting.calibrate import (
     two_factor_parameters,
 )
 from optimize.fitting.measurements import make_measurements
+from optimize.fitting.planted import draw_planted
 from optimize.fitting.synth import default_commands, synthesize, synthesize_data
 
 
@@ -279,6 +280,26 @@ def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, eff
         RingPairModel(frozenset(effects)), warm.params, m.command[:, 0], m.command[:, 1]
     )
     np.testing.assert_allclose(warm.residuals, m.position - ramp.position, atol=1e-9)
+
+
+def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum():
+    """States the ramp reached by a fall (snap-through) are warm-started too, and the fit
+    still ends where a fit whose every state comes from the ramp does: large-deflection
+    data with snapped configurations, drawn from the whole design space
+    (optimize.fitting.planted; the seed is in the message)."""
+    seed = int(np.random.SeedSequence().entropy % 2**32)
+    rng = np.random.default_rng(seed)
+    effects = ("large_deflection",)
+    for _ in range(12):
+        case = draw_planted(rng, frozenset(effects), points=(15, 20))
+        if case.synthetic.snapped:
+            break
+    assert case.synthetic.snapped, f"seed {seed}: no snapped configuration in 12 draws"
+    why = f"seed {seed}: {case.describe()}"
+    warm = calibrate(case.design, case.measurements, effects, max_nfev=20)
+    cold = calibrate(case.design, case.measurements, effects, max_nfev=20, warm_start=False)
+    assert warm.estimate == pytest.approx(cold.estimate, rel=1e-6, abs=1e-9), why
+    assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-6), why
 
 
 def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypatch):
