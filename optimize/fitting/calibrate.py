@@ -701,10 +701,7 @@ def calibrate(
 class CrossValidation:
     """K-fold cross-validation over held-out configurations.
 
-    rmse_mm : RMS over all held-out rows of the model-measurement distance; a row the
-        fold's model cannot solve counts the straight robot's miss (:func:`straight_miss`,
-        as in the fit's objective), so a model cannot gain by leaving its worst rows
-        without a state. [mm]
+    rmse_mm : RMS over all held-out rows of the model-measurement distance. [mm]
     fold_rmse_mm : shape (k,), the same per fold. [mm]
     errors : shape (N,), each row's distance when it was held out; NaN if unsolved. [m]
     folds : shape (N,) int, the fold of each row.
@@ -748,7 +745,6 @@ def cross_validate(
     fit on k-1 folds of configurations, predict the held-out fold."""
     folds = configuration_folds(m, k, seed)
     errors = np.full(len(m), np.nan)
-    charged = np.full(len(m), np.nan)  # errors, with the straight robot's miss where unsolved
     fold_rmse = np.full(k, np.nan)
     fits = parallel_map(
         lambda f: calibrate(design, m, effects, free, rows=folds != f, **options),  # type: ignore[arg-type]
@@ -757,13 +753,14 @@ def cross_validate(
     for f, res in enumerate(fits):
         held = folds == f
         errors[held] = res.errors[held]
-        miss = np.linalg.norm(straight_miss(res.params, m), axis=1)
-        charged[held] = np.where(np.isfinite(res.errors), res.errors, miss)[held]
-        fold_rmse[f] = np.sqrt(np.mean(charged[held] ** 2)) / MM
+        e = res.errors[held]
+        e = e[np.isfinite(e)]
+        fold_rmse[f] = np.sqrt(np.mean(e**2)) / MM if e.size else np.nan
+    ok = np.isfinite(errors)
     return CrossValidation(
-        rmse_mm=float(np.sqrt(np.mean(charged**2)) / MM),
+        rmse_mm=float(np.sqrt(np.mean(errors[ok] ** 2)) / MM) if ok.any() else float("nan"),
         fold_rmse_mm=fold_rmse,
         errors=errors,
         folds=folds,
-        unconverged=int(np.count_nonzero(~np.isfinite(errors))),
+        unconverged=int(np.count_nonzero(~ok)),
     )

@@ -210,7 +210,7 @@ def _fit(
     # whatever it does on the others.
     rss = float(np.nansum(cal.residuals[solved] ** 2))
     rss += float(np.sum(straight_miss(cal.params, m)[~solved] ** 2))
-    cv_rmse, cv_unsolved = math.nan, 0
+    cv_rmse = math.nan
     if cv:
         # Each fold is kept near the fit of all the data (FOLD_ANCHOR).
         scale = math.sqrt(cal.chi2 / cal.dof) if cal.chi2 > 0 else 1.0
@@ -221,11 +221,10 @@ def _fit(
             for n in free
             if np.isfinite(error[n]) and error[n] > 0
         }
-        held_out = cross_validate(
+        cv_rmse = cross_validate(
             design, m, effects, free, k=k, seed=seed, initial=initial, **options
-        )
-        cv_rmse, cv_unsolved = held_out.rmse_mm, held_out.unconverged
-    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved, cv_unsolved)
+        ).rmse_mm
+    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved)
 
 
 def _scan(

@@ -30,9 +30,6 @@ class Fit:
     unsolved: int = 0
     """Rows the model could not solve at the estimate (each adds to ``rss`` the straight
     robot's miss, :func:`optimize.fitting.calibrate.straight_miss`)."""
-    cv_unsolved: int = 0
-    """Held-out rows the folds' models could not solve (each counts the straight robot's
-    miss in ``cv_rmse_mm``, :class:`optimize.fitting.calibrate.CrossValidation`)."""
 
     @property
     def name(self) -> str:
@@ -105,13 +102,12 @@ class Candidate:
             "cv_rmse_mm": f.cv_rmse_mm if f else math.nan,
             "params": parameter_values(f.calibration) if f else {},
             "unsolved_rows": f.unsolved if f else None,
-            "cv_unsolved_rows": f.cv_unsolved if f and np.isfinite(f.cv_rmse_mm) else None,
             "verdict": self.verdict,
         }
 
 
 NULL_REASONS = {
-    "cv_rmse_mm": "not cross-validated (rejected on its BIC first)",
+    "cv_rmse_mm": "not cross-validated (rejected on its BIC first), or no held-out row solved",
     "rmse_mm": "no row solved",
     "max_abs_mm": "no row solved",
     "bic": "the fit failed (see the verdict), or it fits the data exactly (a zero misfit)",
