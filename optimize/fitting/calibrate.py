@@ -16,7 +16,8 @@ the nominal design, with the widths of :data:`FREE_PARAMETERS`.
 Warm starts: the state of each configuration is the load ramp's
 (:func:`design.equilibrium.solve_equilibria`, or the driven path's), but between two
 evaluations of a fit the parameters change little, so each evaluation after the first
-takes every row's last state and solves once by Newton at the new parameters, with the
+takes every row's state at the fit's current iterate (the lowest cost so far, never a
+rejected trial step's) and solves once by Newton at the new parameters, with the
 checks of :func:`design.equilibrium.drive` (contraction, the stable side of the folds,
 clear of the magnet); rows that fail go through the ramp. A state the ramp reached by a
 fall (``snapped``) is warm-started too: near a fold the ramp may fall elsewhere at the
@@ -334,10 +335,12 @@ class _Problem:
         self.evaluations = 0
         self._key: bytes | None = None
         self._cache: tuple[np.ndarray, np.ndarray, Prediction] | None = None
-        # Warm starts (module docstring): each row's last state, and whether the cached solve
-        # came from them (then the fit's answer is checked with the ramp, :meth:`settle`).
+        # Warm starts (module docstring): each row's state at the best point so far, and
+        # whether the cached solve came from them (then the fit's answer is checked with
+        # the ramp, :meth:`settle`).
         self.warm = True
         self.states: np.ndarray | None = None
+        self.best_cost = np.inf
         self.ramp_only = np.zeros(len(m), bool)  # rows whose warm start went elsewhere
         self._warm_cached = False
         self.warm_solves = 0
@@ -348,8 +351,10 @@ class _Problem:
         )
 
     def invalidate(self) -> None:
-        """Forget the cached solve (after a change of weights)."""
+        """Forget the cached solve and the best cost (after a change of weights, or
+        before a fit starts again)."""
         self._key, self._cache = None, None
+        self.best_cost = np.inf
 
     def params(self, u: np.ndarray) -> np.ndarray:
         p = self.base.copy()
@@ -389,11 +394,6 @@ class _Problem:
             self._warm_cached = pred is not None
             if pred is None:
                 pred = predict(self.model, p, self.m, self.ordered)
-            eq = pred.equilibria
-            if self.states is None:
-                self.states = eq.unknowns.copy()
-            else:
-                self.states[eq.converged] = eq.unknowns[eq.converged]
             out, d_out = prediction_sensitivities(self.model, p, pred)
             self.evaluations += 1
             self._key, self._cache = key, (out, d_out, pred)
@@ -466,7 +466,23 @@ class _Problem:
         parts = [r_pos[self.pos_mask], r_ang[self.ang_mask]]
         rows = np.isfinite(self.prior_width)
         parts.append((u[rows] - self.prior_centre[rows]) / self.prior_width[rows])
-        return np.concatenate(parts)
+        r = np.concatenate(parts)
+        self._keep_states(float(r @ r))
+        return r
+
+    def _keep_states(self, cost: float) -> None:
+        """Keep the cached solve's states as the warm starts if its cost is the lowest so
+        far: the trust region accepts a step only when it lowers the cost, so these are the
+        states of its current iterate. A rejected trial step may have crossed a fold, and
+        starting the next, shorter step from its states would follow that other state."""
+        if cost >= self.best_cost or self._cache is None:
+            return
+        self.best_cost = cost
+        eq = self._cache[2].equilibria
+        if self.states is None:
+            self.states = eq.unknowns.copy()
+        else:
+            self.states[eq.converged] = eq.unknowns[eq.converged]
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         _, d_out, _ = self.evaluate(u)
@@ -609,6 +625,7 @@ def calibrate(
         # fit again from its start, those rows by the ramp (at last every row).
         prob.ramp_only |= other
         prob.warm = retry < WARM_RETRIES
+        prob.invalidate()
         sol = least_squares(
             prob.residuals,
             u_start,

@@ -282,12 +282,15 @@ def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, eff
     np.testing.assert_allclose(warm.residuals, m.position - ramp.position, atol=1e-9)
 
 
-def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum():
+@pytest.mark.parametrize("seed", [2962359177, None], ids=["ci-2962359177", "random"])
+def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum(seed):
     """States the ramp reached by a fall (snap-through) are warm-started too, and the fit
     still ends where a fit whose every state comes from the ramp does: large-deflection
     data with snapped configurations, drawn from the whole design space
-    (optimize.fitting.planted; the seed is in the message)."""
-    seed = int(np.random.SeedSequence().entropy % 2**32)
+    (optimize.fitting.planted; the seed is in the message). Seed 2962359177 failed on CI
+    when rejected trial steps set the warm starts (one crossed a fold; the fit then
+    followed the other state and stopped at twice the ramp's chi2)."""
+    seed = int(np.random.SeedSequence().entropy % 2**32) if seed is None else seed
     rng = np.random.default_rng(seed)
     effects = ("large_deflection",)
     for _ in range(12):
