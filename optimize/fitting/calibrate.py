@@ -45,6 +45,7 @@ millimetres.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -242,6 +243,11 @@ class CalibrationResult:
     unconverged : number of fitted rows without an equilibrium at the estimate.
     evaluations : number of model solves; time_s : wall time. [s]
     message : the optimiser's message, plus any warning on identifiability.
+    states : shape (N, n_unknowns), the equilibria at the estimate; NaN rows where none.
+    jacobian : shape (n, k), d(residual)/d(fit units) of the n fitted data residuals at
+        the estimate, each over its sigma: the measured position coordinates of the fitted
+        rows (row-major), then their tip angles. [-]
+    jacobian_rows : shape (n,), the row of each residual of ``jacobian``.
     """
 
     names: tuple[str, ...]
@@ -266,6 +272,9 @@ class CalibrationResult:
     time_s: float
     message: str = ""
     priors: bool = field(default=False)
+    states: np.ndarray | None = field(default=None, repr=False)
+    jacobian: np.ndarray | None = field(default=None, repr=False)
+    jacobian_rows: np.ndarray | None = field(default=None, repr=False)
 
     def table(self) -> list[dict[str, object]]:
         """One row per parameter in report units: name, unit, nominal, estimate, standard
@@ -708,6 +717,9 @@ def calibrate(
         time_s=time.perf_counter() - t0,
         message=message,
         priors=priors,
+        states=np.where(pred.equilibria.converged[:, None], pred.equilibria.unknowns, np.nan),
+        jacobian=jac[: prob.n_data()],
+        jacobian_rows=np.concatenate([np.nonzero(prob.pos_mask)[0], np.nonzero(prob.ang_mask)[0]]),
     )
 
 
@@ -723,6 +735,9 @@ class CrossValidation:
     errors : shape (N,), each row's distance when it was held out; NaN if unsolved. [m]
     folds : shape (N,) int, the fold of each row.
     unconverged : held-out rows the fitted model could not solve.
+    expected_ratio : ``rmse_mm`` over the in-sample RMSE that a right model, linear in its
+        parameters near the fit of all the data, gives on average with these
+        configurations and folds (:func:`held_out_inflation`); NaN without that fit. [-]
     """
 
     rmse_mm: float
@@ -730,6 +745,7 @@ class CrossValidation:
     errors: np.ndarray
     folds: np.ndarray
     unconverged: int
+    expected_ratio: float = math.nan
 
 
 def configuration_folds(m: Measurements, k: int, seed: int | None = 0) -> np.ndarray:
@@ -748,6 +764,63 @@ def configuration_folds(m: Measurements, k: int, seed: int | None = 0) -> np.nda
     return fold_of_group[group]
 
 
+def held_out_inflation(jacobian: np.ndarray, fold: np.ndarray, position: np.ndarray) -> float:
+    """The ratio of the cross-validated to the in-sample RMS position error that a right
+    model, linear in its parameters near a fit of all the data, gives on average, for
+    equal noise on every coordinate. [-]
+
+    jacobian : shape (n, k), the fit's whitened Jacobian (:attr:`CalibrationResult.jacobian`).
+    fold : shape (n,), the fold each residual is held out in.
+    position : shape (n,) bool, the residuals that count (the position coordinates).
+
+    With the hat matrix H = J (J^T J)^+ J^T, a held-out block f's prediction error is
+    (I - H_ff)^-1 e_f (e the in-sample residuals), whose covariance is s^2 (I - H_ff)^-1;
+    the in-sample residuals' is s^2 (I - H). So the expected squared errors are
+    s^2 sum_f tr (I - H_ff)^-1 held out and s^2 tr (I - H) in sample. About
+    sqrt((1 + p/(0.8 n)) / (1 - p/n)) for p parameters spread over n coordinates held out
+    a fifth at a time; far above it where a few configurations alone fix a parameter
+    (Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 2nd ed.,
+    sec. 7.10: the leave-one-out form e_i / (1 - H_ii)).
+    """
+    j = np.asarray(jacobian, float)
+    hat = j @ np.linalg.pinv(j.T @ j, rcond=1e-10, hermitian=True) @ j.T
+    held = 0.0
+    for f in np.unique(fold):
+        i = np.flatnonzero(fold == f)
+        block = np.linalg.pinv(np.eye(i.size) - hat[np.ix_(i, i)], rcond=1e-12)
+        held += float(np.trace(block[np.ix_(position[i], position[i])]))
+    fitted = float(np.sum(1.0 - np.diag(hat)[position]))
+    return math.sqrt(held / fitted) if fitted > 0 else math.nan
+
+
+def _continued(
+    model: RingPairModel,
+    full: CalibrationResult,
+    fold: CalibrationResult,
+    m: Measurements,
+    held: np.ndarray,
+    ordered: bool | Literal["driven"] | None,
+) -> np.ndarray:
+    """The held-out rows' distances (shape (N,), NaN elsewhere or unsolved) [m] at the
+    ``fold``'s parameters, each from the state of the fit ``full`` of all the data, by
+    :func:`design.equilibrium.drive` (Newton, contracting, on the stable side of the
+    folds): the fold's miss on the state the robot is in."""
+    errors = np.full(len(m), np.nan)
+    assert full.states is not None
+    cols = np.flatnonzero(held & np.isfinite(full.states).all(axis=1))
+    if cols.size == 0:
+        return errors
+    start = applied_commands(model, full.params, m, ordered)[0][cols]
+    end = applied_commands(model, fold.params, m, ordered)[0][cols]
+    x, ok = drive(model, fold.params, full.states[cols].T, start.T, end.T)
+    if ok.any():
+        out, _ = sensitivities(model, fold.params, x.T[ok], end[ok])
+        position = np.full((len(m), 3), np.nan)
+        position[cols[ok]] = out[:, :3]
+        errors[cols[ok]] = position_errors(position, m)[cols[ok]]
+    return errors
+
+
 def cross_validate(
     design: Design,
     m: Measurements,
@@ -756,28 +829,52 @@ def cross_validate(
     *,
     k: int = 5,
     seed: int | None = 0,
+    full: CalibrationResult | None = None,
     **options: object,
 ) -> CrossValidation:
     """K-fold cross-validated position error of :func:`calibrate` (same ``options``):
-    fit on k-1 folds of configurations, predict the held-out fold."""
+    fit on k-1 folds of configurations, predict the held-out fold.
+
+    full : the fit of all the data. A held-out row with a state there is predicted from
+        that state at the fold's parameters (:func:`_continued`); the fold's own solve
+        (load ramp or path) only where that fails. Near a fold of the equilibria, a
+        fold's parameters a little off the full fit's can make the ramp fall to another
+        state; its error would then measure that jump, not how well the fold's
+        parameters predict the robot in the state it is in.
+    """
     folds = configuration_folds(m, k, seed)
+    model = model_for(frozenset(effects))
+    ordered = options.get("ordered")
+
+    def fold(f: int) -> np.ndarray:
+        held = folds == f
+        res = calibrate(design, m, effects, free, rows=~held, **options)  # type: ignore[arg-type]
+        errors = np.where(held, res.errors, np.nan)
+        if full is not None and full.states is not None:
+            continued = _continued(model, full, res, m, held, ordered)  # type: ignore[arg-type]
+            errors = np.where(np.isfinite(continued), continued, errors)
+        return errors
+
+    per_fold = parallel_map(fold, range(k))
     errors = np.full(len(m), np.nan)
     fold_rmse = np.full(k, np.nan)
-    fits = parallel_map(
-        lambda f: calibrate(design, m, effects, free, rows=folds != f, **options),  # type: ignore[arg-type]
-        range(k),
-    )
-    for f, res in enumerate(fits):
+    for f, e_f in enumerate(per_fold):
         held = folds == f
-        errors[held] = res.errors[held]
-        e = res.errors[held]
+        errors[held] = e_f[held]
+        e = e_f[held]
         e = e[np.isfinite(e)]
         fold_rmse[f] = np.sqrt(np.mean(e**2)) / MM if e.size else np.nan
     ok = np.isfinite(errors)
+    expected = math.nan
+    if full is not None and full.jacobian is not None and full.jacobian_rows is not None:
+        rows = full.jacobian_rows
+        position = np.arange(rows.size) < int(m.measured[full.rows].sum())
+        expected = held_out_inflation(full.jacobian, folds[rows], position)
     return CrossValidation(
         rmse_mm=float(np.sqrt(np.mean(errors[ok] ** 2)) / MM) if ok.any() else float("nan"),
         fold_rmse_mm=fold_rmse,
         errors=errors,
         folds=folds,
         unconverged=int(np.count_nonzero(~ok)),
+        expected_ratio=expected,
     )

@@ -114,11 +114,11 @@ NOISE_P = 1e-3
 """With stated sigmas, residuals whose chi-square p-value is above this are noise."""
 HELD_OUT_RATIO = 2.0
 """The final model does not generalise where its cross-validated RMSE exceeds its
-in-sample RMSE by more than this factor; e.g. folds that land on another branch of the
-robot than the data's. For a right model linear in its p parameters, fitted to n
-measured coordinates and held out a fifth at a time, the ratio is about
-sqrt((1 + p / (0.8 n)) / (1 - p / n)): 1.3 for the smallest data sets (16 rows seen from
-above, 8 free parameters). [-]"""
+in-sample RMSE by more than this factor times the ratio a right model would give with
+the same configurations and folds (:func:`optimize.fitting.calibrate.held_out_inflation`:
+about 1.3 for 16 rows seen from above and 8 free parameters, several where a few
+configurations alone fix a parameter, e.g. a far magnet seen from above); e.g. folds that
+land on another branch of the robot than the data's, or a missing effect. [-]"""
 
 Progress = Callable[[str], None]
 Fitted = tuple[CalibrationResult, bool | Literal["driven"]]
@@ -210,7 +210,7 @@ def _fit(
     # whatever it does on the others.
     rss = float(np.nansum(cal.residuals[solved] ** 2))
     rss += float(np.sum(straight_miss(cal.params, m)[~solved] ** 2))
-    cv_rmse = math.nan
+    cv_rmse = expected = math.nan
     if cv:
         # Each fold is kept near the fit of all the data (FOLD_ANCHOR).
         scale = math.sqrt(cal.chi2 / cal.dof) if cal.chi2 > 0 else 1.0
@@ -221,10 +221,11 @@ def _fit(
             for n in free
             if np.isfinite(error[n]) and error[n] > 0
         }
-        cv_rmse = cross_validate(
-            design, m, effects, free, k=k, seed=seed, initial=initial, **options
-        ).rmse_mm
-    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved)
+        held_out = cross_validate(
+            design, m, effects, free, k=k, seed=seed, initial=initial, full=cal, **options
+        )
+        cv_rmse, expected = held_out.rmse_mm, held_out.expected_ratio
+    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved, expected)
 
 
 def _scan(
@@ -427,11 +428,13 @@ def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> 
             "the residual exceeds the stated noise without a pattern any candidate explains "
             f"({size})"
         )
-    if fit.cv_rmse_mm > HELD_OUT_RATIO * fit.calibration.rmse_mm:
+    expected = fit.cv_expected_ratio if np.isfinite(fit.cv_expected_ratio) else 1.0
+    if fit.cv_rmse_mm > HELD_OUT_RATIO * expected * fit.calibration.rmse_mm:
         return (
             f"the final model does not predict configurations it was not fitted to: the "
             f"cross-validated RMSE is {fit.cv_rmse_mm / fit.calibration.rmse_mm:.1f}x the "
-            f"in-sample one ({size}); a missing effect, or fits that land on another "
+            f"in-sample one, where a right model would give about {expected:.1f}x with these "
+            f"configurations ({size}); a missing effect, or fits that land on another "
             "branch of the robot"
         )
     return ""

@@ -30,6 +30,9 @@ class Fit:
     unsolved: int = 0
     """Rows the model could not solve at the estimate (each adds to ``rss`` the straight
     robot's miss, :func:`optimize.fitting.calibrate.straight_miss`)."""
+    cv_expected_ratio: float = math.nan
+    """The ratio of ``cv_rmse_mm`` to the in-sample RMSE a right model would give with
+    these configurations (:func:`optimize.fitting.calibrate.held_out_inflation`). [-]"""
 
     @property
     def name(self) -> str:
@@ -100,6 +103,7 @@ class Candidate:
             "bic_change": self.bic_change,
             "rmse_mm": f.calibration.rmse_mm if f else math.nan,
             "cv_rmse_mm": f.cv_rmse_mm if f else math.nan,
+            "cv_expected_ratio": f.cv_expected_ratio if f else math.nan,
             "params": parameter_values(f.calibration) if f else {},
             "unsolved_rows": f.unsolved if f else None,
             "verdict": self.verdict,
@@ -108,6 +112,7 @@ class Candidate:
 
 NULL_REASONS = {
     "cv_rmse_mm": "not cross-validated (rejected on its BIC first), or no held-out row solved",
+    "cv_expected_ratio": "not cross-validated, or the fit has no Jacobian",
     "rmse_mm": "no row solved",
     "max_abs_mm": "no row solved",
     "bic": "the fit failed (see the verdict), or it fits the data exactly (a zero misfit)",

@@ -289,7 +289,10 @@ def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum(seed):
     data with snapped configurations, drawn from the whole design space
     (optimize.fitting.planted; the seed is in the message). Seed 2962359177 failed on CI
     when rejected trial steps set the warm starts (one crossed a fold; the fit then
-    followed the other state and stopped at twice the ramp's chi2)."""
+    followed the other state and stopped at twice the ramp's chi2). On random draws the
+    answer is the ramp's state at the warm fit's estimate, and its misfit never far above
+    the ramp-only fit's."""
+    fixed = seed is not None
     seed = int(np.random.SeedSequence().entropy % 2**32) if seed is None else seed
     rng = np.random.default_rng(seed)
     effects = ("large_deflection",)
@@ -299,10 +302,21 @@ def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum(seed):
             break
     assert case.synthetic.snapped, f"seed {seed}: no snapped configuration in 12 draws"
     why = f"seed {seed}: {case.describe()}"
-    warm = calibrate(case.design, case.measurements, effects, max_nfev=20)
-    cold = calibrate(case.design, case.measurements, effects, max_nfev=20, warm_start=False)
-    assert warm.estimate == pytest.approx(cold.estimate, rel=1e-6, abs=1e-9), why
-    assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-6), why
+    m = case.measurements
+    warm = calibrate(case.design, m, effects, max_nfev=20)
+    ramp = predict(RingPairModel(frozenset(effects)), warm.params, m).equilibria.position
+    np.testing.assert_allclose(
+        warm.residuals, np.where(m.measured, m.position - ramp, np.nan), atol=1e-9, err_msg=why
+    )
+    cold = calibrate(case.design, m, effects, max_nfev=20, warm_start=False)
+    if fixed:
+        assert warm.estimate == pytest.approx(cold.estimate, rel=1e-6, abs=1e-9), why
+        assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-6), why
+    else:
+        # Two local searches of an objective that jumps where the ramp's fall changes:
+        # they agreed on 58 of 60 measured seeds; of the others the warm fit was once far
+        # better (chi2 13 against 6028) and once 1.8 % worse.
+        assert warm.chi2 <= 1.1 * cold.chi2, why
 
 
 def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypatch):
@@ -326,3 +340,57 @@ def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypat
     assert f"fitted again from the start with {moved} row(s) by the load ramp" in warm.message
     assert warm.estimate == pytest.approx(cold.estimate, rel=1e-6)
     assert warm.chi2 == pytest.approx(cold.chi2, rel=1e-6)
+
+
+def test_held_out_inflation_reproduces_refits_of_a_linear_model():
+    """For a model linear in its parameters, the expected cross-validated over in-sample
+    squared error of held_out_inflation equals that of refitting each fold by least
+    squares (an independent Monte Carlo of the refits; Hastie, Tibshirani & Friedman,
+    The Elements of Statistical Learning, sec. 7.10): for parameters spread over the
+    configurations, and for one that mostly two configurations fix (as a far magnet seen
+    from above), where it is larger. Random Jacobians; the seed is printed."""
+    from optimize.fitting.calibrate import held_out_inflation
+
+    seed = int(np.random.SeedSequence().entropy % 2**32)
+    rng = np.random.default_rng(seed)
+    rows, axes = int(rng.integers(14, 30)), int(rng.integers(2, 4))
+    p, k = int(rng.integers(3, 8)), 5
+    n = rows * axes
+    row = np.repeat(np.arange(rows), axes)
+    fold = np.arange(rows)[rng.permutation(rows)] % k
+    spread = np.nan
+    for local in (False, True):
+        j = rng.normal(size=(n, p))
+        if local:  # the last parameter acts mostly on two configurations of one fold
+            two = np.flatnonzero(fold == 0)[:2]
+            j[:, -1] = rng.normal(size=n) * np.where(np.isin(row, two), 1.0, 0.01)
+        position = np.ones(n, bool)
+        expected = held_out_inflation(j, fold[row], position)
+        held = fitted = 0.0
+        for _ in range(2000):
+            y = rng.normal(size=n)
+            beta = np.linalg.lstsq(j, y, rcond=None)[0]
+            fitted += float(np.sum((y - j @ beta) ** 2))
+            for f in range(k):
+                out = fold[row] == f
+                b_f = np.linalg.lstsq(j[~out], y[~out], rcond=None)[0]
+                held += float(np.sum((y[out] - j[out] @ b_f) ** 2))
+        why = f"seed {seed}, local {local}: {rows} rows x {axes}, {p} parameters"
+        assert expected == pytest.approx(np.sqrt(held / fitted), rel=0.05), why
+        if local:
+            assert expected > 1.15 * spread, why
+        spread = expected
+
+
+def test_held_out_rows_continue_from_the_full_fits_state(demonstrator):
+    """At the full fit's own parameters a held-out row continued from its state is that
+    state: the distances equal the full fit's errors (and so the fold's error moves only
+    with the fold's parameters, not with a fall of its ramp)."""
+    from optimize.fitting.calibrate import _continued
+
+    m = synthesize(demonstrator, ["torsion"], n=20, noise_mm=0.3, seed=5)
+    full = calibrate(demonstrator, m, ("torsion",), max_nfev=10)
+    held = np.arange(len(m)) % 3 == 0
+    e = _continued(RingPairModel(frozenset({"torsion"})), full, full, m, held, None)
+    np.testing.assert_allclose(e[held], full.errors[held], rtol=1e-9, atol=1e-12)
+    assert np.isnan(e[~held]).all()

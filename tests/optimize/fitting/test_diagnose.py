@@ -239,12 +239,15 @@ def test_a_failing_candidate_is_reported_and_the_diagnosis_goes_on(monkeypatch):
 
 @pytest.mark.slow
 def test_a_final_model_that_does_not_predict_held_out_rows_is_reported():
-    """A right model predicts the configurations held out of its fit about as well as
-    those it was fitted to (the ratio of the RMSEs is about sqrt((1 + p/(0.8 n)) / (1 -
-    p/n)) for p parameters and n coordinates, below HELD_OUT_RATIO); far above it, the
-    report says that the final model does not generalise instead of nothing (benchmark
-    seed [2, 12, 0]: CV RMSE 16.7x the noise, unexplained ''). The smallest data sets (16
-    rows) of nothing planted, drawn from the whole design space."""
+    """A right model predicts the configurations held out of its fit about as well as a
+    linear model would with the same configurations (the ratio of the RMSEs within
+    HELD_OUT_RATIO of held_out_inflation's: about 1.3 for 16 rows, several times that
+    where a few configurations fix a parameter, e.g. a far magnet seen from above); far
+    above it, the report says that the final model does not generalise instead of
+    nothing (benchmark seed [2, 12, 0]: CV RMSE 16.7x the noise, unexplained ''). The
+    smallest data sets (16 rows) of nothing planted, drawn from the whole design space;
+    seeds 11, 16, 36 and 39 of this draw failed the rule against the plain ratio, or with
+    held-out rows solved by the fold's own load ramp (which fell to another state)."""
     from dataclasses import replace
 
     from optimize.fitting.diagnose import HELD_OUT_RATIO, _fit, _unexplained
@@ -255,10 +258,16 @@ def test_a_final_model_that_does_not_predict_held_out_rows_is_reported():
     m = case.measurements
     m.sigma[:] = np.nan  # the rule under test, not the chi-square one
     fit = _fit(case.design, m, frozenset(), k=5, seed=0, cv=True, starts=[None], sigma=None)
-    why = f"seed {seed}: {case.describe()}; RMSE {fit.calibration.rmse_mm:.3g} mm"
-    assert fit.cv_rmse_mm < HELD_OUT_RATIO * fit.calibration.rmse_mm, why
+    ratio = fit.cv_rmse_mm / fit.calibration.rmse_mm
+    why = (
+        f"seed {seed}: {case.describe()}; RMSE {fit.calibration.rmse_mm:.3g} mm, CV {ratio:.2f}x"
+        f" (a linear model's {fit.cv_expected_ratio:.2f}x)"
+    )
+    assert 1.0 <= fit.cv_expected_ratio < 10.0, why
+    assert ratio < HELD_OUT_RATIO * fit.cv_expected_ratio, why
     assert _unexplained(m, fit, ()) == "", why
-    worse = replace(fit, cv_rmse_mm=1.1 * HELD_OUT_RATIO * fit.calibration.rmse_mm)
-    text = _unexplained(m, worse, ())
+    off = 1.1 * HELD_OUT_RATIO * fit.cv_expected_ratio
+    text = _unexplained(m, replace(fit, cv_rmse_mm=off * fit.calibration.rmse_mm), ())
     assert "does not predict configurations it was not fitted to" in text, text
-    assert f"{1.1 * HELD_OUT_RATIO:.1f}x the in-sample" in text, text
+    assert f"{off:.1f}x the in-sample one" in text, text
+    assert f"a right model would give about {fit.cv_expected_ratio:.1f}x" in text, text
