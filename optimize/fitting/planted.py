@@ -11,7 +11,9 @@ within +-10 %, the external magnet's centre within +-3 mm of the file's on each 
 The bench: 16-80 commanded configurations on the bench path of
 :func:`optimize.fitting.synth.default_commands`, a 3-D or a top view, noise 0.1-0.5 mm
 per coordinate, with or without the acquisition order (``sequence``; always with it
-where hysteresis is planted), with or without each row's sigma.
+where hysteresis is planted; without it the sweeps go one way, each configuration once,
+as a data set without the order must), with or without each row's sigma. Every drawn set
+can be written as a data-set folder (:func:`optimize.fitting.measurements.save_dataset`).
 
 Planted strengths: transmissions 0.3-3 x their nominal torsional rigidity
 (log-uniform), friction play 2-8 deg in each transmission, a tip mass of 0-0.5 g with the

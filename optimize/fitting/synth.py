@@ -32,19 +32,23 @@ DEFAULT_PROXIMAL_DEG = (0.0, 120.0, 240.0)
 """theta2 values of the default bench path. [deg]"""
 
 
-def default_commands(n: int = DEFAULT_N) -> np.ndarray:
+def default_commands(n: int = DEFAULT_N, both_ways: bool = True) -> np.ndarray:
     """A bench path like the paper's, about ``n`` points: for each theta2 in
     DEFAULT_PROXIMAL_DEG, theta1 sweeps from theta2 (parallel rings) to theta2 + 180 deg
-    (antiparallel) and back, so both directions of travel are seen.
+    (antiparallel) and back, so both directions of travel are seen; ``both_ways=False``:
+    the forward sweeps only, each configuration once.
 
     Returns shape (M, 2), M close to n, in driving order. [rad]
     """
     if n < 2 * len(DEFAULT_PROXIMAL_DEG):
         raise ValueError(f"n must be at least {2 * len(DEFAULT_PROXIMAL_DEG)}; got {n}")
     per_block = n / len(DEFAULT_PROXIMAL_DEG)
-    steps = max(1, int(round((per_block - 1) / 2)))  # forward steps; block = 2 steps + 1
-    relative = np.linspace(0.0, 180.0, steps + 1)
-    sweep = np.concatenate([relative, relative[-2::-1]])
+    if both_ways:
+        steps = max(1, int(round((per_block - 1) / 2)))  # forward steps; block = 2 steps + 1
+        relative = np.linspace(0.0, 180.0, steps + 1)
+        sweep = np.concatenate([relative, relative[-2::-1]])
+    else:
+        sweep = np.linspace(0.0, 180.0, max(2, int(round(per_block))))
     rows = [np.column_stack([t2 + sweep, np.full(sweep.size, t2)]) for t2 in DEFAULT_PROXIMAL_DEG]
     return np.deg2rad(np.vstack(rows))
 
@@ -134,7 +138,7 @@ def synthesize_data(
 
     effects : model effects of the truth (names of :data:`design.model.EFFECTS`).
     commands : shape (M, 2), commanded (theta1, theta2) in driving order [rad]; default
-        :func:`default_commands` (``n``).
+        :func:`default_commands` (``n``; one way when not ``ordered``).
     view : '3d' (x, y, z measured) or 'top' (x, y; z left empty).
     noise_mm : one-sigma Gaussian noise on each measured coordinate. [mm]
     seed : seed of ``numpy.random.default_rng``; the same seed gives the same data.
@@ -144,8 +148,9 @@ def synthesize_data(
     record_sigma : write ``noise_mm`` as each row's sigma (default: the data do not say).
     ordered : drive the robot along the commands and record the order (``sequence``);
         False: each configuration's state on its own (the load ramp from rest,
-        :func:`design.equilibrium.solve_equilibria`), no ``sequence`` column (not with
-        ``hysteresis``, which needs a path).
+        :func:`design.equilibrium.solve_equilibria`), no ``sequence`` column, so each
+        configuration once (a data set without the order cannot tell repeats apart,
+        docs/formats.md); not with ``hysteresis``, which needs a path.
     """
     if view not in VIEWS:
         raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
@@ -155,11 +160,22 @@ def synthesize_data(
         raise ValueError(f"angle_noise_deg must be a finite number >= 0; got {angle_noise_deg!r}")
     model = model_for(frozenset(effects))
     params = true_parameters(design, params_override)
-    cmd = default_commands(n) if commands is None else np.asarray(commands, float).reshape(-1, 2)
+    if commands is None:
+        cmd = default_commands(n, both_ways=ordered)
+    else:
+        cmd = np.asarray(commands, float).reshape(-1, 2)
     if len(cmd) == 0:
         raise ValueError("commands must hold at least one (theta1, theta2) pair")
     if not ordered and "hysteresis" in model.effects:
         raise ValueError("hysteresis needs a path: synthesize it with ordered=True")
+    if not ordered:
+        _, first, count = np.unique(cmd, axis=0, return_index=True, return_counts=True)
+        if (count > 1).any():
+            t1, t2 = np.rad2deg(cmd[first[np.argmax(count > 1)]])
+            raise ValueError(
+                f"commands repeat the configuration ({t1:g}, {t2:g}) deg; without the order "
+                "(ordered=False) expected each configuration once"
+            )
     solve = solve_sequence if ordered else solve_equilibria
     eq = solve(model, params, cmd[:, 0], cmd[:, 1])
     keep = eq.converged & eq.stable

@@ -3,11 +3,12 @@ planted data sets (:mod:`optimize.fitting.planted`, ``benchmarks/diagnose.py``).
 
 Each case draws a nominal design from the whole design space, a robot as built that
 differs from it, the planted effects and a bench run with noise; the diagnosis gets only
-the design file and the data. Two data sets per effect, two pairs and two null sets; the
-sample keeps to 16-30 configurations to fit CI's time (the benchmark draws 16-80). The
-generator's criterion makes every planted effect detectable (the best model without it
-leaves at least DETECTABLE noise sigmas per coordinate on the noise-free data); a case
-that is not says so and fails.
+the design file and the data, written as a data-set folder and read back (as a user's).
+Two data sets per effect, two pairs and two null sets; the sample keeps to 16-30
+configurations to fit CI's time (the benchmark draws 16-80). The generator's criterion
+makes every planted effect detectable (the best model without it leaves at least
+DETECTABLE noise sigmas per coordinate on the noise-free data); a case that is not says
+so and fails.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 
 from optimize.fitting.diagnose import _fit, _refine, diagnose
+from optimize.fitting.measurements import load_dataset, save_dataset
 from optimize.fitting.planted import PLANTABLE, PLANTED_SETS, draw_planted
 
 SEED = 15
@@ -35,12 +37,13 @@ CASES += [(pair, 0) for pair in PAIRS]
 @pytest.mark.parametrize(
     ("planted", "number"), CASES, ids=[f"{'+'.join(sorted(p)) or 'null'}-{j}" for p, j in CASES]
 )
-def test_the_planted_effects_are_named_and_nothing_else(planted, number):
+def test_the_planted_effects_are_named_and_nothing_else(planted, number, tmp_path):
     seed = [SEED, PLANTED_SETS.index(planted), number]
     case = draw_planted(np.random.default_rng(seed), planted, points=POINTS)
     why = f"seed {seed}: {case.describe()}"
     assert case.detectable, f"not detectable after {case.tries} draws: {why}"
-    result = diagnose(case.design, case.measurements, seed=number)
+    design, m = load_dataset(save_dataset(tmp_path / "set", case.design, case.measurements))
+    result = diagnose(design, m, seed=number)
     doc = result.to_json()
     verdicts = "; ".join(f"{k}: {c['verdict']}" for k, c in doc["candidates"].items())
     why += f"; named {[c.name for c in result.causes]}; {verdicts}"

@@ -9,6 +9,8 @@ import pytest
 from design.equilibrium import solve_design, solve_equilibria, solve_sequence
 from design.model import RingPairModel
 from design.registry import index
+from optimize.fitting.measurements import load_dataset, save_dataset
+from optimize.fitting.setups import random_design
 from optimize.fitting.synth import default_commands, synthesize, synthesize_data
 
 
@@ -18,6 +20,38 @@ def test_default_path_is_a_bench_sweep_both_ways():
     first = cmd[cmd[:, 1] == 0, 0]
     assert first[0] == 0 and first.max() == 180 and first[-1] == 0  # parallel -> anti -> back
     np.testing.assert_allclose(np.unique(cmd[:, 1].round(9)), [0, 120, 240])
+
+
+def test_one_way_path_commands_each_configuration_once():
+    for n in (6, 16, 31, 80):
+        cmd = np.rad2deg(default_commands(n, both_ways=False))
+        assert abs(len(cmd) - n) <= 2, n
+        assert len(np.unique(cmd.round(9), axis=0)) == len(cmd), n
+        first = cmd[cmd[:, 1] == 0, 0]
+        assert first[0] == 0 and first[-1] == 180 and (np.diff(first) > 0).all(), n
+
+
+def test_bench_runs_without_the_order_can_be_written_and_read_back(tmp_path):
+    """A data set without a sequence column must hold each configuration once
+    (docs/formats.md): bench runs synthesized without the order, on designs drawn from the
+    whole design space (optimize.fitting.setups), are written as data-set folders and read
+    back to the same numbers (the seed is in the message)."""
+    seed = int(np.random.SeedSequence().entropy % 2**32)
+    rng = np.random.default_rng(seed)
+    for k in range(4):
+        design = random_design(rng)
+        n = int(rng.integers(16, 81))
+        view = str(rng.choice(["3d", "top"]))
+        data = synthesize_data(design, n=n, view=view, seed=k, ordered=False)
+        m = data.measurements
+        why = f"seed {seed}, set {k}: n {n}, {view}, {len(m)} rows"
+        assert m.sequence is None, why
+        assert len(m) + data.dropped == len(default_commands(n, both_ways=False)), why
+        if len(m) == 0:
+            continue
+        _, back = load_dataset(save_dataset(tmp_path / str(k), design, m))
+        np.testing.assert_allclose(back.command, m.command, atol=1e-9, err_msg=why)
+        np.testing.assert_allclose(back.position, m.position, atol=1e-9, err_msg=why)
 
 
 def test_same_seed_same_data_other_seed_other_noise(demonstrator):
@@ -91,3 +125,5 @@ def test_bad_arguments_are_named(demonstrator):
         synthesize(demonstrator, view="side")
     with pytest.raises(ValueError, match="noise_mm"):
         synthesize(demonstrator, noise_mm=-1)
+    with pytest.raises(ValueError, match=r"repeat the configuration \(30, 0\) deg"):
+        synthesize(demonstrator, commands=np.deg2rad([[0, 0], [30, 0], [30, 0]]), ordered=False)
