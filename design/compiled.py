@@ -100,18 +100,45 @@ def _build(cc: str, name: str, key: str, source: str, target: Path) -> bool:
     return True
 
 
-def evaluate_columns(function: ca.Function, args: list[np.ndarray]) -> list[np.ndarray]:
-    """Evaluate a mapped function on column-major buffers without DM conversions (which
-    would cost more than the solve itself). Returns each output as (rows, size)."""
-    buf, trigger = function.buffer()
-    flat = [np.asfortranarray(a, dtype=float).ravel(order="F") for a in args]
-    outs = [np.empty(function.nnz_out(i)) for i in range(function.n_out())]
-    for i, a in enumerate(flat):
-        buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
-    for i, o in enumerate(outs):
-        buf.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
-    trigger()
-    return [o.reshape(function.size2_out(i), function.size1_out(i)).T for i, o in enumerate(outs)]
+THREADS = 2
+"""Threads of a mapped function of at least THREADED_FROM columns."""
+THREADED_FROM = 32
+"""Columns from which a map runs on THREADS threads: below, starting the threads costs
+more than they save (the large-deflection rod's Newton step, 2 columns: 283 us threaded,
+113 us serial; 32: about even; 2048: 30 ms against 49 ms serial), and a fit's load ramps
+run mostly on a few columns."""
+
+
+def mapped(function: ca.Function, size: int) -> ColumnEvaluator:
+    """``function`` mapped over ``size`` columns (threaded from THREADED_FROM)."""
+    if size >= THREADED_FROM:
+        return ColumnEvaluator(function.map(size, "thread", THREADS))
+    return ColumnEvaluator(function.map(size))
+
+
+class ColumnEvaluator:
+    """Evaluates a mapped function on column-major buffers without DM conversions (which
+    would cost more than the solve itself); the outputs' layout is read from CasADi once
+    (querying it on every call cost a tenth of a fit's solves)."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self.function = function
+        self.nnz_out = [function.nnz_out(i) for i in range(function.n_out())]
+        self.shapes = [
+            (function.size2_out(i), function.size1_out(i)) for i in range(function.n_out())
+        ]
+
+    def __call__(self, args: list[np.ndarray]) -> list[np.ndarray]:
+        """Each output as (rows, size) for inputs ``args`` (each (rows, size))."""
+        buf, trigger = self.function.buffer()
+        flat = [np.asfortranarray(a, dtype=float).ravel(order="F") for a in args]
+        outs = [np.empty(n) for n in self.nnz_out]
+        for i, a in enumerate(flat):
+            buf.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
+        for i, o in enumerate(outs):
+            buf.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
+        trigger()
+        return [o.reshape(shape).T for o, shape in zip(outs, self.shapes, strict=True)]
 
 
 class BufferEvaluator:

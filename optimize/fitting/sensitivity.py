@@ -20,14 +20,13 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from design.compiled import compile_function, evaluate_columns
+from design.compiled import ColumnEvaluator, compile_function, mapped
 from design.equilibrium import Equilibria, kernels, solve_equilibria, solve_sequence
 from design.friction import play, play_step
 from design.model import RingPairModel, model_for
 from design.registry import FITTED, NAMES, index
 from optimize.fitting.measurements import Measurements
 
-THREADS = 2
 COMPILE_LIMIT = 12000
 """Sensitivity functions up to this many operations are compiled to C (seconds, once per
 machine); larger ones (the exact cylinder field: ~23,000, about 25 s to compile) run in
@@ -88,8 +87,8 @@ def built_model(effects: frozenset[str]) -> RingPairModel:
 
 
 @lru_cache(maxsize=64)
-def _mapped_sensitivity(model: RingPairModel, size: int) -> ca.Function:
-    return sensitivity_function(model).map(size, "thread", THREADS)
+def _mapped_sensitivity(model: RingPairModel, size: int) -> ColumnEvaluator:
+    return mapped(sensitivity_function(model), size)
 
 
 def sensitivities(
@@ -107,7 +106,7 @@ def sensitivities(
         return np.zeros((0, 5)), np.zeros((0, 5, k))
     fn = _mapped_sensitivity(model, n)
     columns = [unknowns.T, command.T, np.broadcast_to(params[:, None], (params.size, n))]
-    out, d_out = evaluate_columns(fn, columns)
+    out, d_out = fn(columns)
     d_out = d_out.reshape(5, n, k).transpose(1, 0, 2)
     out = out.T
     return out, d_out
