@@ -394,3 +394,44 @@ def test_held_out_rows_continue_from_the_full_fits_state(demonstrator):
     e = _continued(RingPairModel(frozenset({"torsion"})), full, full, m, held, None)
     np.testing.assert_allclose(e[held], full.errors[held], rtol=1e-9, atol=1e-12)
     assert np.isnan(e[~held]).all()
+
+
+@pytest.mark.parametrize("seed", [7, None], ids=["seed-7", "random"])
+def test_a_fold_started_from_the_full_fits_states_is_that_fold(monkeypatch, seed):
+    """A cross-validation fold starts at the fit of all the data; warm-starting its first
+    evaluation from that fit's states (``states``) saves a load ramp of every row and
+    changes nothing else: the same estimates and residuals as the fold fitted without
+    them. A torsion data set drawn from the whole design space (seed in the message);
+    states of the wrong shape are refused with the expected shape."""
+    import optimize.fitting.calibrate as calibration
+
+    fixed = seed is not None
+    seed = int(np.random.SeedSequence().entropy % 2**32) if seed is None else seed
+    case = draw_planted(np.random.default_rng(seed), frozenset({"torsion"}), points=(16, 24))
+    why = f"seed {seed}: {case.describe()}"
+    m, effects = case.measurements, ("torsion",)
+    full = calibrate(case.design, m, effects, max_nfev=15)
+    held = np.arange(len(m)) % 4 == 0
+    ramped: list[int] = []  # rows solved by the load ramp: in whole predictions, or alone
+    solve, whole = calibration.solve_equilibria, calibration.predict
+
+    def counted(model, params, theta1, theta2, *args, **kwargs):
+        ramped.append(np.size(theta1))
+        return solve(model, params, theta1, theta2, *args, **kwargs)
+
+    def counted_whole(model, params, data, *args, **kwargs):
+        ramped.append(len(data))
+        return whole(model, params, data, *args, **kwargs)
+
+    monkeypatch.setattr(calibration, "solve_equilibria", counted)
+    monkeypatch.setattr(calibration, "predict", counted_whole)
+    options = {"rows": ~held, "initial": full.estimate, "max_nfev": 10}
+    plain = calibrate(case.design, m, effects, **options)
+    rows_plain, ramped[:] = sum(ramped), []
+    warm = calibrate(case.design, m, effects, states=full.states, **options)
+    assert warm.estimate == pytest.approx(plain.estimate, rel=1e-6, abs=1e-9), why
+    np.testing.assert_allclose(warm.residuals, plain.residuals, atol=1e-9, err_msg=why)
+    if fixed or full.unconverged == 0:
+        assert sum(ramped) <= rows_plain - len(m), why  # the first evaluation's ramp
+    with pytest.raises(ValueError, match=r"states: expected shape \(\d+, \d+\)"):
+        calibrate(case.design, m, effects, states=full.states[:, :2], **options)
