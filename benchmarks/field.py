@@ -27,11 +27,10 @@ import magpylib as magpy
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from design.compiled import compile_function
+from design.compiled import THREADS, compile_function
 from design.cylinder_field import cylinder_field_function
 from design.designfile import default_design
 
-THREADS = 2
 CHUNK = 1000
 
 
