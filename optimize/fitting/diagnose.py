@@ -666,8 +666,8 @@ def diagnose(
             if other is not best:
                 tried[other.name] = replace(
                     other,
-                    verdict=f"passed (BIC {other.bic_change:+.1f}, {other_text}), but "
-                    f"{best.name} fits better (BIC {best.bic_change:+.1f})",
+                    verdict=f"rejected: BIC {other.bic_change:+.1f} and {other_text} pass, "
+                    f"but {best.name} fits better (BIC {best.bic_change:+.1f})",
                 )
         return accepted
 
