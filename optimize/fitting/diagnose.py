@@ -200,8 +200,6 @@ def _fit(
             scanned, _ = fit(start, "driven")
             if scanned.unconverged == 0 and scanned.chi2 < cal.chi2:
                 cal, path = scanned, "driven"
-    options["ordered"] = path
-    initial = {n: cal.estimate[n] for n in free}
     solved = np.isfinite(cal.errors)
     unsolved = int(np.count_nonzero(~solved))
     coordinates = int(m.measured.sum())
@@ -210,22 +208,38 @@ def _fit(
     # whatever it does on the others.
     rss = float(np.nansum(cal.residuals[solved] ** 2))
     rss += float(np.sum(straight_miss(cal.params, m)[~solved] ** 2))
-    cv_rmse = expected = math.nan
-    if cv:
-        # Each fold is kept near the fit of all the data (FOLD_ANCHOR).
-        scale = math.sqrt(cal.chi2 / cal.dof) if cal.chi2 > 0 else 1.0
-        error = cal.standard_error
-        options["max_nfev"] = FOLD_EVALUATIONS
-        options["anchor"] = {
-            n: (cal.estimate[n], FOLD_ANCHOR * error[n] / scale)
-            for n in free
-            if np.isfinite(error[n]) and error[n] > 0
-        }
-        held_out = cross_validate(
-            design, m, effects, free, k=k, seed=seed, initial=initial, full=cal, **options
-        )
-        cv_rmse, expected = held_out.rmse_mm, held_out.expected_ratio
-    return Fit(effects, cal, cv_rmse, rss, coordinates, path, unsolved, expected)
+    result = Fit(effects, cal, math.nan, rss, coordinates, path, unsolved)
+    return _cross_validated(design, m, result, k=k, seed=seed, sigma=sigma) if cv else result
+
+
+def _cross_validated(
+    design: Design, m: Measurements, fit: Fit, *, k: int, seed: int, sigma: float | None
+) -> Fit:
+    """``fit`` with its k-fold cross-validated RMSE; each fold starts at the fit of all the
+    data, solves the configurations as it did, and is kept near it (FOLD_ANCHOR)."""
+    cal = fit.calibration
+    scale = math.sqrt(cal.chi2 / cal.dof) if cal.chi2 > 0 else 1.0
+    error = cal.standard_error
+    anchor = {
+        n: (cal.estimate[n], FOLD_ANCHOR * error[n] / scale)
+        for n in cal.names
+        if np.isfinite(error[n]) and error[n] > 0
+    }
+    held_out = cross_validate(
+        design,
+        m,
+        fit.effects,
+        cal.names,
+        k=k,
+        seed=seed,
+        initial=cal.estimate,
+        full=cal,
+        sigma=sigma,
+        max_nfev=FOLD_EVALUATIONS,
+        ordered=fit.ordered,
+        anchor=anchor,
+    )
+    return replace(fit, cv_rmse_mm=held_out.rmse_mm, cv_expected_ratio=held_out.expected_ratio)
 
 
 def _scan(
@@ -622,16 +636,16 @@ def diagnose(
             tried[c.name] = c
         return found
 
-    def cross_validated(c: Candidate) -> Candidate:
+    def in_full(c: Candidate) -> Candidate:
         assert c.fit is not None
-        say(f"cross-validating {c.name}")
-        return attempt(c.effects, True, [c.fit.calibration])
+        return attempt(c.effects, False, [c.fit.calibration])
 
     def decide(round_: list[Candidate]) -> Candidate | None:
-        """Fit in full and cross-validate every candidate whose screening BIC falls by more
-        than BIC_DROP (in parallel); of those whose full BIC still does and whose
-        cross-validated RMSE falls by more than CV_GAIN, the one of lowest full BIC. (A
-        screen's few evaluations rank candidates roughly: benchmark seed [2, 7, 0], near
+        """Fit in full every candidate whose screening BIC falls by more than BIC_DROP (in
+        parallel); cross-validate those whose full BIC still does, lowest full BIC first,
+        and accept the first whose cross-validated RMSE falls by more than CV_GAIN: the
+        one of lowest full BIC among those that pay (the others need no cross-validation).
+        (A screen's few evaluations rank candidates roughly: benchmark seed [2, 7, 0], near
         field and torsion planted, the screen ranked large deflection first, which then
         passed, and near field was never fitted in full.)"""
         passing = []
@@ -642,34 +656,46 @@ def diagnose(
                 tried[c.name] = replace(c, verdict=_bic_verdict(c))
             else:
                 passing.append(c)
-        paying: list[tuple[Candidate, str]] = []
-        for full in parallel_map(cross_validated, passing):
+        if passing:
+            say("fitting " + ", ".join(c.name for c in passing) + " in full")
+        ranked = []
+        for full in parallel_map(in_full, passing):
             if full.fit is None or not full.bic_change < -BIC_DROP:
                 tried[full.name] = replace(full, verdict=full.verdict or _bic_verdict(full))
+            else:
+                ranked.append(full)
+        ranked.sort(key=_bic_order)
+        for i, full in enumerate(ranked):
+            assert full.fit is not None
+            say(f"cross-validating {full.name}")
+            try:
+                fit = _cross_validated(design, m, full.fit, k=k, seed=seed, sigma=sigma)
+            except Exception as exc:  # reported; the search goes on
+                reason = f"fit failed: cross-validation: {_reason(exc)}"
+                tried[full.name] = replace(full, fit=None, bic_change=math.nan, verdict=reason)
                 continue
-            before, after = current.cv_rmse_mm, full.fit.cv_rmse_mm
+            before, after = current.cv_rmse_mm, fit.cv_rmse_mm
             text = f"cross-validated RMSE {before:.3g} -> {after:.3g} mm"
-            if _cv_pays(before, after):
-                paying.append((full, text))
+            if not _cv_pays(before, after):
+                tried[full.name] = replace(
+                    full,
+                    fit=fit,
+                    verdict=f"rejected: BIC {full.bic_change:+.1f} passes, but the {text} "
+                    f"does not fall by {CV_GAIN:.0%}",
+                )
                 continue
-            tried[full.name] = replace(
-                full,
-                verdict=f"rejected: BIC {full.bic_change:+.1f} passes, but the {text} does "
-                f"not fall by {CV_GAIN:.0%}",
+            accepted = replace(
+                full, fit=fit, verdict=f"accepted: BIC {full.bic_change:+.1f}, {text}"
             )
-        if not paying:
-            return None
-        best, text = min(paying, key=lambda p: _bic_order(p[0]))
-        accepted = replace(best, verdict=f"accepted: BIC {best.bic_change:+.1f}, {text}")
-        tried[best.name] = accepted
-        for other, other_text in paying:
-            if other is not best:
+            tried[full.name] = accepted
+            for other in ranked[i + 1 :]:
                 tried[other.name] = replace(
                     other,
-                    verdict=f"rejected: BIC {other.bic_change:+.1f} and {other_text} pass, "
-                    f"but {best.name} fits better (BIC {best.bic_change:+.1f})",
+                    verdict=f"rejected: BIC {other.bic_change:+.1f} passes, but "
+                    f"{full.name} fits better (BIC {full.bic_change:+.1f}; not cross-validated)",
                 )
-        return accepted
+            return accepted
+        return None
 
     def unexplained_left(s: Sequence[ResidualDependence], fit: Fit) -> bool:
         stated = np.isfinite(m.sigma).any()

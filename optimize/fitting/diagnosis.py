@@ -78,7 +78,7 @@ class Candidate:
     """One model the search tried, and what became of it.
 
     effects : its effects. on_top_of : the name of the model it was added to.
-    fit : its fit (the full one where it was cross-validated), None where the fit failed.
+    fit : its fit (the full one where it was fitted in full), None where the fit failed.
     bic_change : its BIC minus that of ``on_top_of``; NaN where the fit failed. [-]
     verdict : 'accepted: ...', 'rejected: ...', 'fit failed: ...' or 'not tried: ...',
         with the numbers it was decided on.
@@ -111,7 +111,8 @@ class Candidate:
 
 
 NULL_REASONS = {
-    "cv_rmse_mm": "not cross-validated (rejected on its BIC first), or no held-out row solved",
+    "cv_rmse_mm": "not cross-validated (rejected on its BIC first, or another candidate of "
+    "its round fitted better), or no held-out row solved",
     "cv_expected_ratio": "not cross-validated, or the fit has no Jacobian",
     "rmse_mm": "no row solved",
     "max_abs_mm": "no row solved",
