@@ -41,7 +41,7 @@ import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy import stats
@@ -142,7 +142,8 @@ def _fit(
     free: Sequence[str] = (),
 ) -> Fit:
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
-    estimates; a mapping: these values, the others nominal), keep the best, and
+    estimates, and its states if it is of this model; a mapping: these values, the others
+    nominal), keep the best, and
     cross-validate it if ``cv``. ``free``: the free parameters (default: the effects'
     :func:`default_free`)."""
     free = tuple(free) or default_free(effects)
@@ -161,12 +162,18 @@ def _fit(
         same_solved = np.array_equal(np.isnan(fast), np.isnan(driven))
         return not (same_solved and np.nanmax(np.abs(fast - driven), initial=0.0) < 1e-6)
 
-    options: dict[str, object] = {"sigma": sigma, "max_nfev": max_nfev}
+    options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev}
     if max_nfev is not None:  # a screen: skip starts where most rows have no state
         options["min_solved"] = MIN_SOLVED
 
-    def fit(start: Mapping[str, float] | None, path: bool | Literal["driven"]) -> Fitted:
-        cal = calibrate(design, m, effects, free, initial=start, ordered=path, **options)  # type: ignore[arg-type]
+    def fit(
+        start: Mapping[str, float] | None,
+        path: bool | Literal["driven"],
+        states: np.ndarray | None = None,
+    ) -> Fitted:
+        cal = calibrate(
+            design, m, effects, free, initial=start, ordered=path, states=states, **options
+        )
         return cal, path
 
     # From each start: the fast fit, refitted along the path if the path matters at its
@@ -177,8 +184,10 @@ def _fit(
     for s in starts:
         values = {} if s is None else s if isinstance(s, Mapping) else s.estimate
         initial = {n: v for n, v in values.items() if n in free} or None
+        # A fit of this model starts from its own states (the first evaluation warm).
+        same = isinstance(s, CalibrationResult) and s.effects == model.effects
         try:
-            cal, path = fit(initial, mode)
+            cal, path = fit(initial, mode, s.states if same else None)  # type: ignore[union-attr]
         except UnsolvedStart as exc:
             skipped.append(exc)
             continue

@@ -128,7 +128,8 @@ def profile_sigma(
     best counts. [-]"""
     _check(fit)
     rest = tuple(n for n in fit.names if n != name)
-    r, _ = _refit(design, m, fit, name, value, rest, [fit.estimate, *starts], ordered, sigma)
+    begin = [(fit.estimate, fit.states), *((s, None) for s in starts)]
+    r, _ = _refit(design, m, fit, name, value, rest, begin, ordered, sigma)
     return r
 
 
@@ -144,11 +145,14 @@ def _refit(
     name: str,
     value: float,
     rest: Sequence[str],
-    starts: Sequence[Mapping[str, float]],
+    starts: Sequence[tuple[Mapping[str, float], np.ndarray | None]],
     ordered: bool | Literal["driven"] | None,
     sigma: float | None,
 ) -> tuple[float, CalibrationResult]:
-    """Refit ``rest`` with ``name`` fixed at ``value``: (signed r, the best refit)."""
+    """Refit ``rest`` with ``name`` fixed at ``value``: (signed r, the best refit). Each
+    start is the others' values and the rows' states near them or None (the first
+    evaluation warm-starts from them, :func:`optimize.fitting.calibrate.calibrate`: a
+    profile's point lies near the fit or the point before it)."""
     cal = min(
         (
             calibrate(
@@ -160,8 +164,9 @@ def _refit(
                 initial={n: s[n] for n in rest if n in s},
                 ordered=ordered,
                 sigma=sigma,
+                states=states,
             )
-            for s in starts
+            for s, states in starts
         ),
         key=lambda c: c.chi2,
     )
@@ -188,16 +193,17 @@ def _end(
     if span < 1e-12:
         return bound, 0
     start = {n: fit.estimate[n] for n in rest}
+    states = fit.states
     below, above = (0.0, 0.0), None  # (distance from u_hat, |r|) with |r| < 1 and > 1
     h = min(step, span)
     for fits in range(1, MAX_FITS + 1):
         value = _from_u(name, u_hat + sign * h)
-        r, cal = _refit(design, m, fit, name, value, rest, [start], ordered, sigma)
+        r, cal = _refit(design, m, fit, name, value, rest, [(start, states)], ordered, sigma)
         r = abs(r)
         if abs(r - 1) < TOLERANCE:
             return value, fits
         if r < 1:
-            below, start = (h, r), {n: cal.estimate[n] for n in rest}
+            below, start, states = (h, r), {n: cal.estimate[n] for n in rest}, cal.states
             if h >= span:
                 return bound, fits  # the bound comes before 1 sigma
         else:
