@@ -400,8 +400,9 @@ def _cause(
     return Cause(name, after, params, intervals, text + ".")
 
 
-Starts = list[CalibrationResult | Mapping[str, float] | None]
-"""Where fits start (see :func:`_fit`)."""
+Start = CalibrationResult | Mapping[str, float] | None
+"""Where a fit starts (see :func:`_fit`)."""
+Starts = list[Start]
 
 
 def _not_applicable(design: Design, m: Measurements, effect: str) -> str:
@@ -583,38 +584,37 @@ def diagnose(
         own = default_free(effects)
         return (*own, *(n for n in current.calibration.names if n not in own))
 
-    def attempt(
-        effects: frozenset[str], cv: bool, starts: Starts, max_nfev: int | None = None
-    ) -> Candidate:
-        """A fit of ``effects`` as a candidate on top of ``current`` (failure reported).
-        Where the model has no state for most rows at every start (the current model's
-        parameters, bent to mimic the effect, can put the robot where the effect leaves
-        no equilibrium, e.g. pulled into a near magnet), it starts from the nominal design."""
-
-        def fit_from(from_: Starts) -> Fit:
+    def fitted(effects: frozenset[str], start: Start, max_nfev: int | None) -> Fit | Exception:
+        """A fit of ``effects`` as a candidate on top of ``current`` from ``start``, or why
+        it failed (a candidate's failure is reported; the search goes on)."""
+        try:
             return _fit(
                 design,
                 m,
                 effects,
                 k=k,
                 seed=seed,
-                cv=cv,
-                starts=from_,
+                cv=False,
+                starts=[start],
                 sigma=sigma,
                 max_nfev=max_nfev,
                 free=free_for(effects),
             )
+        except Exception as exc:
+            return exc
 
-        try:
-            try:
-                f = fit_from(starts)
-            except UnsolvedStart:
-                if None in starts:
-                    raise
-                f = fit_from([None])
-        except Exception as exc:  # a candidate's failure is reported; the search goes on
-            return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
-        return Candidate(effects, current.name, f, f.bic() - current.bic(), "")
+    def candidate(effects: frozenset[str], outcomes: Sequence[Fit | Exception]) -> Candidate:
+        """The candidate ``effects`` with the best of its fits from several starts, as
+        :func:`_fit` keeps it (one that solves every row, then the least misfit); failed
+        with the first error if any start's fit failed, or if every start was skipped
+        (:class:`optimize.fitting.calibrate.UnsolvedStart`)."""
+        fits = [r for r in outcomes if isinstance(r, Fit)]
+        errors = [r for r in outcomes if not isinstance(r, Fit | UnsolvedStart)]
+        if fits and not errors:
+            best = min(fits, key=lambda f: (f.calibration.unconverged > 0, f.calibration.chi2))
+            return Candidate(effects, current.name, best, best.bic() - current.bic(), "")
+        exc = (errors or [r for r in outcomes if isinstance(r, Exception)])[0]
+        return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
 
     def starts_for(effects: frozenset[str]) -> Starts:
         """Screening starts: the current estimates, the nominal design (in every round:
@@ -633,21 +633,28 @@ def diagnose(
         return starts
 
     def screen(added: list[frozenset[str]]) -> list[Candidate]:
-        """Screening fits of each of ``added`` on top of ``current``, in parallel
-        (:mod:`optimize.fitting.workers`); each is entered in ``tried``."""
+        """Screening fits of each of ``added`` on top of ``current``, each entered in
+        ``tried``: every start of every candidate is a job of its own, in parallel
+        (:mod:`optimize.fitting.workers`), those of the large-deflection rod (the costliest
+        to solve) first, so the workers finish together; a candidate keeps its best start
+        as :func:`_fit` would (one that solves every row, then the least misfit)."""
         effects = [current.effects | a for a in added]
         for e in effects:
             built_model(e)
-        found = parallel_map(
-            lambda e: attempt(e, False, starts_for(e), max_nfev=SCREEN_EVALUATIONS), effects
-        )
+        jobs = [(e, start) for e in effects for start in starts_for(e)]
+        jobs.sort(key=lambda job: "large_deflection" not in job[0])  # stable
+        outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), jobs)
+        found = [
+            candidate(e, [r for (e_, _), r in zip(jobs, outcomes, strict=True) if e_ == e])
+            for e in effects
+        ]
         for c in found:
             tried[c.name] = c
         return found
 
     def in_full(c: Candidate) -> Candidate:
         assert c.fit is not None
-        return attempt(c.effects, False, [c.fit.calibration])
+        return candidate(c.effects, [fitted(c.effects, c.fit.calibration, None)])
 
     def decide(round_: list[Candidate]) -> Candidate | None:
         """Fit in full every candidate whose screening BIC falls by more than BIC_DROP (in
