@@ -9,13 +9,15 @@ Method (the result format is docs/formats.md's diagnosis JSON):
    the deflection and the distance to the external magnet as quadratics, the acquisition
    order as a cubic, the direction of travel as a sign) and F-test each against the
    residual noise (:func:`residual_structure`).
-3. Greedy forward selection: fit every candidate effect added to the current model (its
-   own parameters freed, :data:`optimize.fitting.calibrate.EFFECT_FREE`); take the candidates in
-   order of the Bayesian information criterion, n ln(RSS'/RSS) + k' ln n, and accept the
-   first whose BIC falls by more than BIC_DROP (very strong evidence, Kass & Raftery 1995)
-   and whose cross-validated RMSE falls by more than CV_GAIN; repeat while one is accepted
-   and the residual is not yet consistent with the stated noise (chi-square test, when the
-   data give sigma).
+3. Greedy forward selection: screen every candidate effect added to the current model
+   (its own parameters freed, :data:`optimize.fitting.calibrate.EFFECT_FREE`) by short fits
+   from several starts; fit in full those whose Bayesian information criterion,
+   n ln(RSS'/RSS) + k' ln n, falls by more than BIC_DROP (very strong evidence, Kass &
+   Raftery 1995); cross-validate those whose full BIC still does, lowest first, and
+   accept the first whose cross-validated RMSE falls by more than CV_GAIN; repeat while
+   one is accepted and the residual is not yet consistent with the stated noise
+   (chi-square test, when the data give sigma); where no single addition pays and
+   structure remains, pairs.
    After each acceptance, refit the model with the parameters its effects make
    separable also free (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`: the field's
    strength under gravity), kept if that pays by the same two tests (:func:`_refine`);
