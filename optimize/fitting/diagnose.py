@@ -414,6 +414,31 @@ Start = CalibrationResult | Mapping[str, float] | None
 Starts = list[Start]
 
 
+def screen_starts(
+    current: Fit, effects: frozenset[str], screened: Mapping[str, Mapping[str, float]]
+) -> Starts:
+    """Where a screen of ``effects`` on top of ``current`` starts: the current estimates,
+    the nominal design (in every round: the current model may have bent its parameters to
+    mimic the missing effect, into a basin the candidate cannot leave from there;
+    benchmark seed [2, 7, 0], near_field on top of torsion: BIC -3 from the other starts,
+    -114 from the nominal design), the added effects' own estimates from their single
+    screens (``screened``: effect -> its parameters' estimates), the candidate as it
+    reduces to the current model (NESTED_START), and the nominal design with softer
+    transmissions (SOFT_START)."""
+    added = effects - current.effects
+    starts: Starts = [current.calibration, None]
+    guesses = {n: v for e in added for n, v in screened.get(e, {}).items()}
+    own = [n for e in added for n in EFFECT_FREE[e]]
+    nested = {n: NESTED_START[n] for n in own if n in NESTED_START}
+    soft = {n: SOFT_START[n] for n in own if n in SOFT_START}
+    for extra in (guesses, nested):
+        if extra:
+            starts.append({**current.calibration.estimate, **extra})
+    if soft:  # from the nominal design, as the current estimates may mimic the effect
+        starts.append(soft)
+    return starts
+
+
 def _not_applicable(design: Design, m: Measurements, effect: str) -> str:
     """Why ``effect`` cannot be told from these data at all ('' if it can)."""
     if effect == "hysteresis" and m.sequence is None:
@@ -625,27 +650,6 @@ def diagnose(
         exc = (errors or [r for r in outcomes if isinstance(r, Exception)])[0]
         return Candidate(effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}")
 
-    def starts_for(effects: frozenset[str]) -> Starts:
-        """Screening starts: the current estimates, the nominal design (in every round:
-        the current model may have bent its parameters to mimic the missing effect, into
-        a basin the candidate cannot leave from there; benchmark seed [2, 7, 0],
-        near_field on top of torsion: BIC -3 from the other starts, -114 from the
-        nominal design), the added effects' own estimates from their single screens, the
-        candidate as it reduces to the current model (NESTED_START), and the nominal
-        design with softer transmissions (SOFT_START)."""
-        added = effects - current.effects
-        starts: Starts = [current.calibration, None]
-        guesses = {n: v for e in added for n, v in screened.get(e, {}).items()}
-        own = [n for e in added for n in EFFECT_FREE[e]]
-        nested = {n: NESTED_START[n] for n in own if n in NESTED_START}
-        soft = {n: SOFT_START[n] for n in own if n in SOFT_START}
-        for extra in (guesses, nested):
-            if extra:
-                starts.append({**current.calibration.estimate, **extra})
-        if soft:  # from the nominal design, as the current estimates may mimic the effect
-            starts.append(soft)
-        return starts
-
     def screen(added: list[frozenset[str]]) -> list[Candidate]:
         """Screening fits of each of ``added`` on top of ``current``, each entered in
         ``tried``: every start of every candidate is a job of its own, in parallel
@@ -655,7 +659,7 @@ def diagnose(
         effects = [current.effects | a for a in added]
         for e in effects:
             built_model(e)
-        jobs = [(e, start) for e in effects for start in starts_for(e)]
+        jobs = [(e, start) for e in effects for start in screen_starts(current, e, screened)]
         jobs.sort(key=lambda job: "large_deflection" not in job[0])  # stable
         outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), jobs)
         found = [
