@@ -105,6 +105,14 @@ nominal design with these it is the noise's)."""
 SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 """Factors on each positive (log-fitted) parameter, alone and with the others of its
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
+CENTRE = ("external_center_x", "external_center_y", "external_center_z")
+CENTRE_OFFSETS = (-4 * MM, -2 * MM, 2 * MM, 4 * MM)
+"""Moves of the external magnet's centre along each axis at which a screen of the near
+field looks for a better start (see :func:`_scan`): near a strong magnet the rows' states
+change branch with where it is, and the baseline's dipole-field estimate of the centre
+can lie a branch away (seed [5, 1, 0]: from the baseline's estimates the near-field
+screen ended at 300 times the noise's misfit, from the centre moved 4 mm along y at the
+noise's). [m]"""
 SCREEN_EVALUATIONS = 12
 """Model evaluations of a screening fit (a candidate's BIC before it is fitted in full)."""
 MIN_SOLVED = 0.5
@@ -213,7 +221,7 @@ def _fit(
     # A fit that solves every row first; among fits that all leave rows, the least misfit.
     cal, path = min(fits, key=lambda f: (f[0].unconverged > 0, f[0].chi2))
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
-        start = _scan(model, m, cal, free)
+        start = _scan(model, m, cal.params, free)
         if start is not None:
             scanned, _ = fit(start, "driven")
             if scanned.unconverged == 0 and scanned.chi2 < cal.chi2:
@@ -261,42 +269,74 @@ def _cross_validated(
 
 
 def _scan(
-    model: RingPairModel, m: Measurements, cal: CalibrationResult, free: Sequence[str]
+    model: RingPairModel,
+    m: Measurements,
+    params: np.ndarray,
+    free: Sequence[str],
+    *,
+    ordered: Literal["driven"] | bool = "driven",
+    factors: Sequence[float] = SCAN_FACTORS,
+    offsets: Sequence[float] = (),
 ) -> dict[str, float] | None:
-    """A better start for a fit along the path, or None.
+    """A better start for a fit than ``params``, or None.
 
-    Driven along a path, the robot snaps (or not) from one branch to another, so the misfit
-    jumps where a parameter crosses a snap: a local fit stops at the edge of its basin
-    (e.g. transmissions fitted too stiff to snap where the bench did). Evaluate the misfit
-    along the path at the estimate with each positive parameter scaled by SCAN_FACTORS,
-    alone and together with the others of its effect (both transmissions); return the best
-    point if it beats the estimate."""
+    Where the robot is multistable the misfit jumps where a parameter moves a row's state
+    to another branch, so a local fit stops at the edge of its basin. Driven along a path,
+    the robot snaps (or not) from one branch to another (e.g. transmissions fitted too
+    stiff to snap where the bench did); near a strong magnet, the rows' branches change
+    with where the magnet is. Evaluate the misfit (solved as ``ordered``) at ``params``
+    with each free positive parameter scaled by ``factors``, alone and together with the
+    others of its effect (both transmissions), and with the external magnet's centre moved
+    by each of ``offsets`` [m] along each free axis; return the best point if it beats
+    ``params``."""
+    moves: list[list[tuple[str, float, float]]] = []  # (name, factor, offset) each
     groups = [[n] for n in free if FREE_PARAMETERS[n].kind == "log"]
     groups += [
         [n for n in names if n in free]
         for names in EFFECT_FREE.values()
         if sum(n in free and FREE_PARAMETERS[n].kind == "log" for n in names) > 1
     ]
+    for group in groups:
+        for factor in factors:
+            moves.append([(n, factor, 0.0) for n in group])
+    for axis in (n for n in CENTRE if n in free):
+        for offset in offsets:
+            moves.append([(axis, 1.0, offset)])
     measured = np.isfinite(m.position)
 
     def misfit(params: np.ndarray) -> float:
-        position = predict(model, params, m, ordered="driven").equilibria.position
+        position = predict(model, params, m, ordered=ordered).equilibria.position
         r = (position - m.position)[measured]
         return float(np.sum(r**2)) if np.isfinite(r).all() else math.inf
 
-    points = [cal.params]
-    for group in groups:
-        for factor in SCAN_FACTORS:
-            params = cal.params.copy()
-            for name in group:
-                spec = FREE_PARAMETERS[name]
-                params[index(name)] = np.clip(params[index(name)] * factor, spec.lower, spec.upper)
-            points.append(params)
+    points = [params]
+    for move in moves:
+        moved = params.copy()
+        for name, factor, offset in move:
+            spec = FREE_PARAMETERS[name]
+            value = moved[index(name)] * factor + offset
+            moved[index(name)] = np.clip(value, spec.lower, spec.upper)
+        points.append(moved)
     values = parallel_map(misfit, points)
-    best = int(np.argmin(values))  # the first of equals; 0: the estimate itself
+    best = int(np.argmin(values))  # the first of equals; 0: params themselves
     if best == 0 or not values[best] < values[0]:
         return None
     return {n: float(points[best][index(n)]) for n in free}
+
+
+def _centre_scan(
+    design: Design, m: Measurements, current: Fit, effects: frozenset[str], free: Sequence[str]
+) -> dict[str, float] | None:
+    """A screening start for ``effects`` (with the near field) on top of ``current``: its
+    estimates with the external magnet's centre moved by CENTRE_OFFSETS where that fits
+    better (:func:`_scan`), or None."""
+    model = model_for(effects)
+    params = model.parameters(design)
+    for name, value in current.calibration.estimate.items():
+        params[index(name)] = value
+    return _scan(
+        model, m, params, free, ordered="hysteresis" in effects, factors=(), offsets=CENTRE_OFFSETS
+    )
 
 
 def _cv_pays(before: float, after: float) -> bool:
@@ -660,6 +700,11 @@ def diagnose(
         for e in effects:
             built_model(e)
         jobs = [(e, start) for e in effects for start in screen_starts(current, e, screened)]
+        for e in effects:
+            if "near_field" in e - current.effects:
+                moved = _centre_scan(design, m, current, e, free_for(e))
+                if moved is not None:
+                    jobs.append((e, moved))
         jobs.sort(key=lambda job: "large_deflection" not in job[0])  # stable
         outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), jobs)
         found = [
