@@ -31,9 +31,10 @@ Data with an acquisition order are fitted along the bench's path wherever that c
 the states (a multistable robot), and each full fit of such data also scans the misfit
 along the path around its estimate (:func:`_scan`): snap-throughs make it jump, which a
 local least-squares fit cannot see. For the same reason a screen starts from several
-points (:func:`screen_starts`): torsion also from stiff and from soft transmissions, the
-near field also from the external magnet's centre moved a few millimetres where that
-fits better (near a strong magnet the rows' branches change with where it is).
+points (:func:`screen_starts`; torsion also from stiff and from soft transmissions), and
+the near field also from the external magnet's centre moved a few millimetres where that
+fits better (:func:`_centre_scan`: near a strong magnet the rows' branches change with
+where it is).
 
 The candidates are only ever judged through the data: the same fits, the same thresholds
 for each. SI units inside; the ``*_mm`` figures are millimetres.
