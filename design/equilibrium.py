@@ -42,6 +42,7 @@ logic is vectorised in numpy. SI units are used for all inputs and outputs.
 
 from __future__ import annotations
 
+import math
 import threading
 from dataclasses import dataclass
 from functools import lru_cache
@@ -143,6 +144,11 @@ sizes (a ramp's or Newton's shrinking batches) spends more building maps than so
 with large chunks; at this size a batch costs 3 % more CPU warm and the sizes built are
 few (steering's benchmark: 1.6 -> 0.86 s CPU for 10,000 targets, 65,536 before)."""
 GRAIN = 1024
+PATH_CORRECTIONS = 4
+"""Newton corrections per call of the path's corrector (``corrections``, one call in place
+of as many from Python, whose overhead is most of a correction's cost: 1.2 us of the
+baseline rod's 8.8 per evaluation); a path's sub-step mostly converges in three, and
+another call goes on where it does not."""
 
 FAILURES = {
     "fold": "the load ramp ended in a fold and the robot found no stable state to fall into",
@@ -204,7 +210,8 @@ class _Kernels:
     column-major), tip angles, clearance to the external magnet);
     ``leap<m>`` (command, params) -> (the tangent at rest dx/dlambda, taken, the state at
     full load, ``check``'s outputs there): the ramp in m equal steps in one call, with
-    the ramp's acceptance tests (:meth:`_leap`)."""
+    the ramp's acceptance tests (:meth:`_leap`); ``corrections``: PATH_CORRECTIONS Newton
+    corrections at full load in one call (:meth:`_corrections`)."""
 
     def __init__(self, model: RingPairModel) -> None:
         self.model = model
@@ -241,6 +248,7 @@ class _Kernels:
         self.newton, self.relaxation, self.descent, self.check = compiled[:4]
         for leap in compiled[4:]:  # run by name: "leap1", "leap2", ...
             setattr(self, leap.name(), leap)
+        self.corrections = self._corrections(model, self.newton)
         self._maps: dict[tuple[str, int], ColumnEvaluator] = {}
         self._tiles: dict[tuple[bytes, int], np.ndarray] = {}
         self._lock = threading.Lock()
@@ -314,6 +322,46 @@ class _Kernels:
         # NaN anywhere fails every comparison in numpy, not in C's fmax: say it here.
         ok = ca.logic_and(ok, ca.sum1(ca.fabs(ca.vertcat(x, r))) < np.inf)
         return ca.Function(f"leap{count}", [command, prm], [rest_tangent, ok, x, *checked])
+
+    @staticmethod
+    def _corrections(model: RingPairModel, newton: ca.Function) -> ca.Function:
+        """``corrections`` (x, command, params, scale) -> (the state after each of
+        PATH_CORRECTIONS Newton corrections from x at full load, (n, K); per correction
+        its size max |step| / scale, max |step|, max |r| and sum |step| (C's fmax skips
+        NaN, a sum does not), (4, K); the monitor and the clearance where each was taken,
+        (m, K) and (1, K)). The compiled ``newton`` called K times in CasADi's virtual
+        machine: nothing to compile, and the decisions (:func:`solve_sequence`) are
+        those of the corrections made one by one, to the last bit."""
+        x0 = ca.MX.sym("x", model.n_unknowns)
+        command = ca.MX.sym("command", 2)
+        prm = ca.MX.sym("params", newton.size1_in(3))
+        scale = ca.MX.sym("scale", model.n_unknowns)
+        x, states, sizes, monitors, clearances = x0, [], [], [], []
+        for _ in range(PATH_CORRECTIONS):
+            r, step, _tangent, monitor, clearance = newton.call([x, command, 1.0, prm])
+            magnitude = ca.fabs(step)
+            sizes.append(
+                ca.vertcat(
+                    ca.mmax(magnitude / scale),
+                    ca.mmax(magnitude),
+                    ca.mmax(ca.fabs(r)),
+                    ca.sum1(magnitude),
+                )
+            )
+            monitors.append(monitor)
+            clearances.append(clearance[0])
+            x = x - step
+            states.append(x)
+        return ca.Function(
+            "corrections",
+            [x0, command, prm, scale],
+            [
+                ca.horzcat(*states),
+                ca.horzcat(*sizes),
+                ca.horzcat(*monitors),
+                ca.horzcat(*clearances),
+            ],
+        )
 
     def _mapped(self, function: ca.Function, size: int) -> ColumnEvaluator:
         key = (function.name(), size)
@@ -1127,9 +1175,9 @@ def drive(
 
 @lru_cache(maxsize=128)
 def _path_evaluator(model: RingPairModel, thread: int) -> BufferEvaluator:
-    """The single-configuration Newton iteration of ``model`` on reusable buffers, one per
-    thread (the buffers are not shared between threads)."""
-    return BufferEvaluator(kernels(model).newton)
+    """The path's Newton corrections of ``model`` (``corrections``) on reusable buffers,
+    one per thread (the buffers are not shared between threads)."""
+    return BufferEvaluator(kernels(model).corrections)
 
 
 def solve_sequence(
@@ -1154,7 +1202,7 @@ def solve_sequence(
             [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
         )
         effective = play(command, width)
-    newton_eval = _path_evaluator(model, threading.get_ident())
+    corrections = _path_evaluator(model, threading.get_ident())
     scale = model.unknown_scale(params)
     n_rod = model.n_rod
     torsion = model.n_unknowns > n_rod
@@ -1162,18 +1210,20 @@ def solve_sequence(
 
     def newton(x0: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, bool]:
         """Newton from x0 at the command c; (state, converged on the stable side)."""
-        x, last = x0.copy(), np.inf
-        for k in range(MAX_CORRECTIONS + 2):
-            r, step, _, monitor, clearance = newton_eval.flat(x, c, 1.0, params)
-            magnitude = np.abs(step)  # (ndarray methods: this loop runs ~10^5 times a fit)
-            size = float((magnitude / scale).max())
-            if not np.isfinite(size) or (k > 0 and size > CONTRACTION * last):
-                return x, False
-            if magnitude.max() < step_tolerance or np.abs(r).max() < TOLERANCE:
-                ok = _fold_free(model, monitor[:, None])[0] and clearance[0] >= 0
-                return x - step, bool(ok)
-            x, last = x - step, size
-        return x, False
+        x, last, k = x0, math.inf, 0
+        while True:
+            states, sizes, monitors, clearances = corrections(x, c, params, scale)
+            # (plain floats: this loop runs ~10^5 times a fit)
+            for j, (size, largest, residual, total) in enumerate(zip(*sizes.tolist(), strict=True)):
+                finite = math.isfinite(size) and math.isfinite(total)
+                if not finite or (k > 0 and size > CONTRACTION * last):
+                    return x, False
+                if largest < step_tolerance or residual < TOLERANCE:
+                    ok = _fold_free(model, monitors[:, j : j + 1])[0] and clearances[0, j] >= 0
+                    return states[:, j], bool(ok)
+                x, last, k = states[:, j], size, k + 1
+                if k == MAX_CORRECTIONS + 2:
+                    return x, False
 
     def lags(x: np.ndarray, c: np.ndarray) -> np.ndarray:
         return x[n_rod:] - c if torsion else np.zeros(2)
