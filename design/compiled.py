@@ -166,8 +166,3 @@ class BufferEvaluator:
     def __call__(self, *args: ArrayLike) -> list[np.ndarray]:
         self._evaluate(args)
         return [o.reshape(shape).T.copy() for o, shape in zip(self.outs, self.shapes, strict=True)]
-
-    def flat(self, *args: ArrayLike) -> list[np.ndarray]:
-        """As calling, with each output flattened column-major (a copy), shape (nnz,)."""
-        self._evaluate(args)
-        return [o.copy() for o in self.outs]
