@@ -17,7 +17,10 @@ given only the nominal design file and the data. Prints, per planted set and ove
 - recovery: |estimate - truth| / reported 1-sigma (profile-likelihood interval on the
   truth's side) of the named planted effects' parameters: median, share within 2 (a
   torsion factor is compared as the true GJ over the nominal one: the planted factor
-  times the tube's modulus as built over nominal);
+  times the tube's modulus as built over nominal; where the final model does not fit the
+  field's strength, the parameters the data fix only relative to it
+  (:data:`optimize.fitting.calibrate.FIELD_RELATIVE`) are compared as the truth over the
+  as-built field's strength relative to the design's, the remanences' product);
 - time: median seconds per diagnosis (goal <= 30 s) on the worker processes
   :mod:`optimize.fitting.workers` gives it (``RINGPAIR_WORKERS``, default one per core),
   and the CPU seconds of the process and its workers (all threads; less sensitive to a
@@ -57,8 +60,8 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 
-from optimize.fitting.calibrate import EFFECT_FREE  # noqa: E402
-from optimize.fitting.diagnose import Diagnosis, _fit, diagnose, report_key  # noqa: E402
+from optimize.fitting.calibrate import EFFECT_FREE, FIELD_RELATIVE  # noqa: E402
+from optimize.fitting.diagnose import Diagnosis, Fit, _fit, diagnose, report_key  # noqa: E402
 from optimize.fitting.planted import PLANTED_SETS, Planted, draw_planted  # noqa: E402
 from optimize.fitting.sensitivity import built_model  # noqa: E402
 from optimize.fitting.workers import worker_count  # noqa: E402
@@ -110,13 +113,18 @@ torsional rigidity found over the nominal one; the robot as built has its own mo
 the true GJ over the nominal is the planted factor times E as built over E nominal."""
 
 
-def identifiable_truth(case: Planted, name: str) -> float:
-    """The true value of parameter ``name`` of ``case`` on the scale the fit estimates it
-    (MODULUS_OF). [SI]"""
+def identifiable_truth(case: Planted, name: str, final: Fit) -> float:
+    """The true value of parameter ``name`` of ``case`` on the scale the ``final`` model
+    estimates it (MODULUS_OF; relative to the field's strength where that model does not
+    fit it). [SI]"""
     truth = case.truth[name]
     if name in MODULUS_OF:
         modulus, tube = MODULUS_OF[name]
         truth *= case.truth[modulus] / getattr(case.design.robot, tube).youngs_modulus
+    if name in FIELD_RELATIVE and "external_remanence" not in final.calibration.names:
+        truth /= (case.truth["magnet_remanence"] / case.design.tip.remanence) * (
+            case.truth["external_remanence"] / case.design.external_magnet.remanence
+        )
     return truth
 
 
@@ -131,7 +139,7 @@ def recovery(result: Diagnosis, case: Planted) -> list[float]:
             estimate = result.final.calibration.estimate[name]
             key, factor = report_key(name)
             lower, upper = (v / factor for v in cause.intervals[key])
-            truth = identifiable_truth(case, name)
+            truth = identifiable_truth(case, name, result.final)
             sigma = (upper - estimate) if truth > estimate else (estimate - lower)
             out.append(abs(estimate - truth) / sigma if sigma > 0 else math.inf)
     return out
@@ -182,7 +190,7 @@ def score(
         "planted_cv_over_noise": reference,
         "recovery": recovery(result, case),
         "estimates": {
-            n: [result.final.calibration.estimate[n], identifiable_truth(case, n)]
+            n: [result.final.calibration.estimate[n], identifiable_truth(case, n, result.final)]
             for c in result.causes
             if c.name in case.planted
             for n in EFFECT_FREE[c.name]

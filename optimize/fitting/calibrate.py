@@ -85,6 +85,8 @@ __all__ = [
     "BASELINE_FREE",
     "EFFECT_FREE",
     "EFFECT_SEPARATES",
+    "FIELD_RELATIVE",
+    "FIELD_TOLERANCE",
     "FREE_PARAMETERS",
     "PAPER_FIELD_GRID",
     "PAPER_STIFFNESS_GRID",
@@ -170,6 +172,23 @@ strength of the field (external remanence, which also absorbs the tip magnets'
 remanence as built) is no longer bound to the bending rigidity. Not freed by default
 (with torsion too the extra freedom slows the search and can lead it astray); the
 diagnosis frees them in a refit once the effect is accepted (its ``_refine``)."""
+FIELD_RELATIVE = (
+    "bending_rigidity_scale",
+    "wire_torsion_scale",
+    "catheter_torsion_scale",
+    "tip_mass",
+)
+"""Parameters the data fix only relative to the field's strength while the remanences are
+not free: every magnetic torque goes with the rings' remanence times the external
+magnet's (the rings' mutual torque with the rings' remanence squared), so scaling both
+remanences by sqrt(s) and these by s leaves every tip where it was (exactly without
+gravity: the rod's own weight does not scale, tests/test_field_scaling.py). A robot
+whose magnets are 5 % stronger than the design file says is fitted as 5 % stiffer."""
+FIELD_TOLERANCE = math.hypot(
+    *(PARAMETERS[n].tolerance[1] for n in ("magnet_remanence", "external_remanence"))  # type: ignore[index]
+)
+"""Relative one-sigma uncertainty of the field's strength: the two remanences' tolerances
+(design.registry) in quadrature. [-]"""
 
 
 def default_free(effects: Iterable[str] = ()) -> tuple[str, ...]:

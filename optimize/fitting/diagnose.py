@@ -60,6 +60,8 @@ from design.units import DEG, MM
 from optimize.fitting.calibrate import (
     EFFECT_FREE,
     EFFECT_SEPARATES,
+    FIELD_RELATIVE,
+    FIELD_TOLERANCE,
     FREE_PARAMETERS,
     CalibrationResult,
     UnsolvedStart,
@@ -78,7 +80,7 @@ from optimize.fitting.diagnosis import (
     parameter_values,
     report_key,
 )
-from optimize.fitting.likelihood import Interval, profile_intervals
+from optimize.fitting.likelihood import Interval, profile_intervals, widened
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.sensitivity import built_model
 from optimize.fitting.structure import (
@@ -413,9 +415,12 @@ def _cause(
     s1: Sequence[ResidualDependence],
     final: Fit,
     profiles: Mapping[str, Interval],
+    field_fixed: bool,
 ) -> Cause:
     """The accepted effect ``name`` (``before`` -> ``after``, structure ``s0`` -> ``s1``),
-    its parameters as the ``final`` model estimates them, with their ``profiles``."""
+    its parameters as the ``final`` model estimates them, with their ``profiles``;
+    ``field_fixed``: the field's strength was not fitted (those of its parameters in
+    FIELD_RELATIVE are then relative to it, and their profiles include its tolerance)."""
     params: dict[str, float] = {}
     intervals: dict[str, tuple[float, float]] = {}
     for p in EFFECT_FREE[name]:
@@ -449,6 +454,13 @@ def _cause(
         text += ", with " + ", ".join(
             f"{k} = {v:.4g} (1 sigma {intervals[k][0]:.3g} to {intervals[k][1]:.3g})"
             for k, v in params.items()
+        )
+    if field_fixed and set(EFFECT_FREE[name]) & set(FIELD_RELATIVE):
+        text += (
+            f" (relative to the field's strength, which these data cannot separate from "
+            f"them: a field x % stronger than the design's remanences means them x % "
+            f"higher; the intervals include the remanences' tolerance, "
+            f"{100 * FIELD_TOLERANCE:.1f} % one sigma)"
         )
     return Cause(name, after, params, intervals, text + ".")
 
@@ -879,10 +891,15 @@ def diagnose(
             )
         except Exception:  # the intervals are then null (JSON) with their reason
             profiles = {p: Interval(math.nan, math.nan, 0) for p in own}
+    field_fixed = "external_remanence" not in current.calibration.names
+    if field_fixed:  # then the data fix these only relative to the field's strength
+        estimate = current.calibration.estimate
+        for p in set(own) & set(FIELD_RELATIVE):
+            profiles[p] = widened(p, estimate[p], profiles[p], FIELD_TOLERANCE)
     causes = []
     for added, before, after, s0, s1 in steps:
         for name in added:
-            cause = _cause(design, name, before, after, s0, s1, current, profiles)
+            cause = _cause(design, name, before, after, s0, s1, current, profiles, field_fixed)
             if len(added) > 1:
                 others = ", ".join(a for a in added if a != name)
                 evidence = cause.evidence[:-1] + f" (accepted together with {others}: no single "

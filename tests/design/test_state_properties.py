@@ -38,8 +38,10 @@ from design.equilibrium import solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
 from design.mounting import MAX_STOP_ANGLE, PROCESSES
 from design.records import Design, Environment, Mounting
+from design.registry import index
 from design.sections import bending_rigidity
 from design.units import MM
+from optimize.fitting.calibrate import FIELD_RELATIVE
 
 AGREEMENT = 1e-5
 """A state and the independent solve's agree to this (the issue's 0.01 mm). [m]"""
@@ -266,6 +268,35 @@ def test_mirror_symmetric_setups_give_mirror_symmetric_states(seed):
     np.testing.assert_array_equal(eq.snapped[a], eq.snapped[b])
     mirrored = eq.position[b] * np.array([1.0, -1.0, 1.0])
     np.testing.assert_allclose(eq.position[a], mirrored, atol=1e-8, equal_nan=True)
+
+
+@pytest.mark.parametrize("seed", range(7600, 7624))
+def test_a_stronger_field_on_a_stiffer_rod_gives_the_same_states(seed):
+    # Without gravity every load on the robot is magnetic: the field's torques and forces
+    # go with the rings' remanence times the external magnet's, the rings' mutual torque
+    # with the rings' remanence squared. Both remanences times sqrt(s) and every
+    # stiffness times s scale the equilibrium equations by s: the same states, which is
+    # why a fit fixes the stiffnesses only relative to the field's strength
+    # (optimize.fitting.calibrate.FIELD_RELATIVE).
+    rng = np.random.default_rng([seed, 1])
+    design, effects, commands = draw(seed, commands=4, stops=False)
+    design = replace(design, environment=Environment())
+    effects = effects - {"gravity"}
+    model = model_for(effects)
+    p = model.parameters(design)
+    q = p.copy()
+    s = float(np.exp(rng.uniform(np.log(0.5), np.log(2.0))))
+    for name in ("magnet_remanence", "external_remanence"):
+        q[index(name)] *= np.sqrt(s)
+    for name in FIELD_RELATIVE:
+        if name != "tip_mass":  # a mass acts only under gravity
+            q[index(name)] *= s
+    a = solve_equilibria(model, p, commands[:, 0], commands[:, 1])
+    b = solve_equilibria(model, q, commands[:, 0], commands[:, 1])
+    where = f"seed {seed}, {sorted(effects)}, s = {s:.3f}"
+    np.testing.assert_array_equal(a.converged, b.converged, err_msg=where)
+    np.testing.assert_allclose(a.position, b.position, atol=1e-9, equal_nan=True, err_msg=where)
+    np.testing.assert_allclose(a.tip_angles, b.tip_angles, atol=1e-8, equal_nan=True, err_msg=where)
 
 
 def near_magnet_design() -> Design:

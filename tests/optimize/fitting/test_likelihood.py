@@ -91,3 +91,29 @@ def test_an_interval_end_where_the_profile_jumps_is_the_jump(monkeypatch):
             assert fits < likelihood.MAX_FITS, (jump, fits)
     distance, _ = end(lambda d: d / se, step=0.5 * se)
     assert distance == pytest.approx(se, rel=likelihood.TOLERANCE)
+
+
+def test_a_further_uncertainty_widens_each_end_in_quadrature():
+    # Independent errors add in quadrature (a 3-4-5 triangle): a log parameter's ends
+    # 0.03 and 0.04 from the estimate in log units, widened by a relative 4 % (log1p 0.04),
+    # lie 0.05 and 0.04 sqrt(2) from it; a linear one (the tip's mass) likewise in its
+    # own unit; a parameter's bound still bounds it; an interval that could not be
+    # computed stays NaN.
+    rel = math.expm1(0.04)
+    out = likelihood.widened(
+        "wire_torsion_scale",
+        2.0,
+        likelihood.Interval(2 * math.exp(-0.03), 2 * math.exp(0.04), 3),
+        rel,
+    )
+    assert out.lower == pytest.approx(2 * math.exp(-0.05), rel=1e-12)
+    assert out.upper == pytest.approx(2 * math.exp(0.04 * math.sqrt(2)), rel=1e-12)
+    assert out.fits == 3
+    mass = likelihood.widened("tip_mass", 2e-4, likelihood.Interval(1.97e-4, 2.04e-4, 2), 0.02)
+    assert (mass.lower, mass.upper) == pytest.approx((1.95e-4, 2e-4 + math.hypot(4e-6, 4e-6)))
+    bounded = likelihood.widened("tip_mass", 1e-5, likelihood.Interval(0.0, 2e-4, 2), 2.0)
+    assert bounded.lower == 0.0
+    nan = likelihood.widened(
+        "wire_torsion_scale", 2.0, likelihood.Interval(math.nan, math.nan, 0), rel
+    )
+    assert math.isnan(nan.lower) and math.isnan(nan.upper)
