@@ -182,8 +182,8 @@ FIELD_RELATIVE = (
 not free: every magnetic torque goes with the rings' remanence times the external
 magnet's (the rings' mutual torque with the rings' remanence squared), so scaling both
 remanences by sqrt(s) and these by s leaves every tip where it was (exactly without
-gravity: the rod's own weight does not scale, tests/test_field_scaling.py). A robot
-whose magnets are 5 % stronger than the design file says is fitted as 5 % stiffer."""
+gravity: the rod's own weight does not scale; tests/design/test_state_properties.py).
+A robot whose magnets are 5 % stronger than the design file says is fitted 5 % stiffer."""
 FIELD_TOLERANCE = math.hypot(
     *(PARAMETERS[n].tolerance[1] for n in ("magnet_remanence", "external_remanence"))  # type: ignore[index]
 )
