@@ -608,10 +608,9 @@ def power_of_data(
         first = effect not in REFITTED_POWER
         rss = _unabsorbed(m, final, position, path, sigma) if first else math.nan
         how = "to first order"
-        if not (
-            np.isfinite(rss)
-            and abs(math.log(math.sqrt(rss / final.n) / noise / DETECTABLE))
-            > math.log(FIRST_ORDER_BAND)
+        first_margin = math.sqrt(rss / final.n) / noise if noise > 0 else math.inf
+        if not np.isfinite(rss) or (
+            DETECTABLE / FIRST_ORDER_BAND <= first_margin <= DETECTABLE * FIRST_ORDER_BAND
         ):
             ideal = replace(m, position=np.where(m.measured, position, np.nan))
             fit = _fit(
