@@ -32,9 +32,9 @@ the states (a multistable robot), and each full fit of such data also scans the 
 along the path around its estimate (:func:`_scan`): snap-throughs make it jump, which a
 local least-squares fit cannot see. For the same reason a screen starts from several
 points (:func:`screen_starts`; torsion also from stiff and from soft transmissions), and
-the near field also from the external magnet's centre moved a few millimetres where that
-fits better (:func:`_centre_scan`: near a strong magnet the rows' branches change with
-where it is).
+the near field also from the external magnet's centre moved a few millimetres, about the
+current estimates and about the nominal design, where that fits better
+(:func:`_centre_scan`: near a strong magnet the rows' branches change with where it is).
 
 The candidates are only ever judged through the data: the same fits, the same thresholds
 for each. SI units inside; the ``*_mm`` figures are millimetres.
@@ -331,18 +331,22 @@ def _scan(
 
 
 def _centre_scan(
-    design: Design, m: Measurements, current: Fit, effects: frozenset[str], free: Sequence[str]
+    design: Design,
+    m: Measurements,
+    around: Fit | None,
+    effects: frozenset[str],
+    free: Sequence[str],
 ) -> dict[str, float] | None:
-    """A screening start for ``effects`` (with the near field) on top of ``current``: its
-    estimates with the external magnet's centre moved by CENTRE_OFFSETS where that fits
-    better (:func:`_scan`), or None."""
+    """A screening start for ``effects`` (with the near field): the estimates of
+    ``around`` (None: the nominal design) with the external magnet's centre moved by
+    CENTRE_OFFSETS where that fits better (:func:`_scan`; along the bench's path where the
+    data have one: near the magnet the states depend on it), or None."""
     model = model_for(effects)
     params = model.parameters(design)
-    for name, value in current.calibration.estimate.items():
+    for name, value in around.calibration.estimate.items() if around is not None else ():
         params[index(name)] = value
-    return _scan(
-        model, m, params, free, ordered="hysteresis" in effects, factors=(), offsets=CENTRE_OFFSETS
-    )
+    path: bool | Literal["driven"] = "driven" if m.sequence is not None else False
+    return _scan(model, m, params, free, ordered=path, factors=(), offsets=CENTRE_OFFSETS)
 
 
 def _cv_pays(before: float, after: float) -> bool:
@@ -772,9 +776,10 @@ def diagnose(
         jobs = [(e, start) for e in effects for start in screen_starts(current, e, screened)]
         for e in effects:
             if "near_field" in e - current.effects:
-                moved = _centre_scan(design, m, current, e, free_for(e))
-                if moved is not None:
-                    jobs.append((e, moved))
+                for around in (current, None):
+                    moved = _centre_scan(design, m, around, e, free_for(e))
+                    if moved is not None:
+                        jobs.append((e, moved))
         jobs.sort(key=lambda job: "large_deflection" not in job[0])  # stable
         outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), jobs)
         found = [
