@@ -282,6 +282,10 @@ def test_warm_started_fit_ends_on_the_ramps_states_and_optimum(demonstrator, eff
     np.testing.assert_allclose(warm.residuals, m.position - ramp.position, atol=1e-9)
 
 
+SNAP_DRAWS = 30
+"""Large-deflection bench sets drawn at most until one has a snapped configuration."""
+
+
 @pytest.mark.parametrize("seed", [2962359177, None], ids=["ci-2962359177", "random"])
 def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum(seed):
     """States the ramp reached by a fall (snap-through) are warm-started too, and the fit
@@ -296,11 +300,13 @@ def test_warm_starts_from_snapped_states_end_on_the_ramps_optimum(seed):
     seed = int(np.random.SeedSequence().entropy % 2**32) if seed is None else seed
     rng = np.random.default_rng(seed)
     effects = ("large_deflection",)
-    for _ in range(12):
+    for _ in range(SNAP_DRAWS):
         case = draw_planted(rng, frozenset(effects), points=(15, 20))
         if case.synthetic.snapped:
             break
-    assert case.synthetic.snapped, f"seed {seed}: no snapped configuration in 12 draws"
+    if not case.synthetic.snapped:  # (seed 708063447 drew its first at the 20th)
+        assert not fixed, f"seed {seed}: no snapped configuration in {SNAP_DRAWS} draws"
+        pytest.skip(f"seed {seed}: no snapped configuration in {SNAP_DRAWS} draws")
     why = f"seed {seed}: {case.describe()}"
     m = case.measurements
     warm = calibrate(case.design, m, effects, max_nfev=20)
