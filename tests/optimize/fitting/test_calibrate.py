@@ -406,9 +406,10 @@ def test_held_out_rows_continue_from_the_full_fits_state(demonstrator):
 def test_a_fold_started_from_the_full_fits_states_is_that_fold(monkeypatch, seed):
     """A cross-validation fold starts at the fit of all the data; warm-starting its first
     evaluation from that fit's states (``states``) saves a load ramp of every row and
-    changes nothing else: the same estimates and residuals as the fold fitted without
-    them. A torsion data set drawn from the whole design space (seed in the message);
-    states of the wrong shape are refused with the expected shape."""
+    changes nothing else: the same estimates (to 1e-3 of their standard errors) and
+    residuals (to 1 % of the noise) as the fold fitted without them. A torsion data set
+    drawn from the whole design space (seed in the message); states of the wrong shape are
+    refused with the expected shape."""
     import optimize.fitting.calibrate as calibration
 
     fixed = seed is not None
@@ -435,8 +436,18 @@ def test_a_fold_started_from_the_full_fits_states_is_that_fold(monkeypatch, seed
     plain = calibrate(case.design, m, effects, **options)
     rows_plain, ramped[:] = sum(ramped), []
     warm = calibrate(case.design, m, effects, states=full.states, **options)
-    assert warm.estimate == pytest.approx(plain.estimate, rel=1e-6, abs=1e-9), why
-    np.testing.assert_allclose(warm.residuals, plain.residuals, atol=1e-9, err_msg=why)
+    # Both searches stop at 10 evaluations: along a flat valley the states' last digits
+    # move an unconverged estimate by a little (seed 1446157788: 4e-4 of a torsion scale
+    # whose standard error is 1.6e3, 1e-6 of it). A different branch or start moves it by
+    # whole standard errors and the residuals by millimetres.
+    for name, value in plain.estimate.items():
+        shift = abs(warm.estimate[name] - value) / plain.standard_error[name]
+        assert shift < 1e-3 or warm.estimate[name] == pytest.approx(value, rel=1e-9), (
+            f"{why}: {name} {warm.estimate[name]:.9g} warm, {value:.9g} plain, "
+            f"{shift:.2g} standard errors apart"
+        )
+    noise_m = case.noise_mm * 1e-3
+    np.testing.assert_allclose(warm.residuals, plain.residuals, atol=1e-2 * noise_m, err_msg=why)
     if fixed or full.unconverged == 0:
         assert sum(ramped) <= rows_plain - len(m), why  # the first evaluation's ramp
     with pytest.raises(ValueError, match=r"states: expected shape \(\d+, \d+\)"):
