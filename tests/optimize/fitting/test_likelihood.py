@@ -4,17 +4,19 @@ to, and at a parameter's bound."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
-from design.designfile import default_design
+from design.designfile import default_design, load_design
 from optimize.fitting import likelihood
 from optimize.fitting.calibrate import calibrate, default_free
 from optimize.fitting.likelihood import profile_intervals, profile_sigma
 from optimize.fitting.synth import synthesize_data
 
 DEMO = default_design()
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 
 
 def test_profile_interval_is_the_gauss_newton_interval_where_the_model_is_locally_linear():
@@ -67,19 +69,29 @@ def test_an_interval_end_where_the_profile_jumps_is_the_jump(monkeypatch):
     scale's estimate, and the search spent its MAX_FITS refits there). A jump that close
     is now placed to RESOLUTION of the standard error, beyond it, in fewer refits; a jump
     further out still gives an end beyond it and within the first step, and a profile
-    without a jump ends where |r| = 1. The refit is replaced by profiles of known r(u)
-    (u = log of the value)."""
+    without a jump ends where |r| = 1. A jump that only the refit from the estimates makes
+    (from the nominal design the profile is smooth: a cliff of the refit's basin, not of
+    the profile) ends where the smooth profile does. The refit is replaced by profiles of
+    known r(u) (u = log of the value)."""
     estimate, se = 0.3, 0.07
     u_hat = math.log(estimate)
-    fit = SimpleNamespace(estimate={}, states=None)
+    # one other parameter, "x", whose value names the basin a refit starts in
+    fit = SimpleNamespace(estimate={"x": "estimate"}, states=None, nominal={"x": "nominal"})
 
-    def end(r_of_distance, step=se):
+    def end(r_of_distance, step=se, from_nominal=None):
         def refit(design, m, fit, name, value, rest, starts, ordered, sigma):
-            return -r_of_distance(u_hat - math.log(value)), fit
+            d = u_hat - math.log(value)
+            basins = {
+                "nominal" if s["x"] == "nominal" and from_nominal else "estimate" for s, _ in starts
+            }
+            r, basin = min(
+                ((from_nominal if b == "nominal" else r_of_distance)(d), b) for b in basins
+            )
+            return -r, SimpleNamespace(estimate={"x": basin}, states=None)
 
         monkeypatch.setattr(likelihood, "_refit", refit)
         value, fits = likelihood._end(
-            None, None, fit, "wire_torsion_scale", (), u_hat, -1.0, step, 0.01, False, None
+            None, None, fit, "wire_torsion_scale", ("x",), u_hat, -1.0, step, 0.01, False, None
         )
         return u_hat - math.log(value), fits
 
@@ -91,6 +103,13 @@ def test_an_interval_end_where_the_profile_jumps_is_the_jump(monkeypatch):
             assert fits < likelihood.MAX_FITS, (jump, fits)
     distance, _ = end(lambda d: d / se, step=0.5 * se)
     assert distance == pytest.approx(se, rel=likelihood.TOLERANCE)
+    for jump in (1e-8 * se, 0.5 * se):
+        distance, _ = end(
+            lambda d, jump=jump: 0.5 * d / se if d < jump else 48.0,
+            step=0.5 * se,
+            from_nominal=lambda d: d / (2 * se),
+        )
+        assert distance == pytest.approx(2 * se, rel=likelihood.TOLERANCE), jump
 
 
 def test_a_further_uncertainty_widens_each_end_in_quadrature():
@@ -117,3 +136,41 @@ def test_a_further_uncertainty_widens_each_end_in_quadrature():
         "wire_torsion_scale", 2.0, likelihood.Interval(math.nan, math.nan, 0), rel
     )
     assert math.isnan(nan.lower) and math.isnan(nan.upper)
+
+
+def test_a_profile_from_a_fit_at_the_edge_of_its_basin_along_a_path_reaches_the_truth():
+    """The example with the rings locked parallel (examples/locked_parallel.toml), torsion
+    planted (transmissions 0.6 and 1.8, both magnets 1.5 T against the design's 1.45),
+    40 rows along the bench's path seen from above, 0.2 mm noise: ``ringpair synth`` and
+    ``ringpair diagnose`` of that set ended at a catheter torsion scale of 2.152, at the edge
+    of a basin where the path snaps at another row 4e-4 of it further down (misfit x80).
+    Refitted only from there, the profile's 1-sigma interval was 2.152-2.208, 7 sigma off
+    the truth. The truth, relative to the field's strength (the transmissions over
+    (1.5 / 1.45)^2, :data:`optimize.fitting.calibrate.FIELD_RELATIVE`), must lie within the
+    intervals of both transmissions."""
+    design = load_design(EXAMPLES / "locked_parallel.toml")
+    effects = ("torsion",)
+    truth = {"wire_torsion_scale": 0.6, "catheter_torsion_scale": 1.8}
+    field = (1.5 / 1.45) ** 2
+    m = synthesize_data(
+        design,
+        effects,
+        n=40,
+        view="top",
+        noise_mm=0.2,
+        seed=1,
+        params_override={**truth, "external_remanence": 1.5, "magnet_remanence": 1.5},
+    ).measurements
+    where_the_diagnosis_ended = {
+        "bending_rigidity_scale": 0.96777,
+        "external_center_x": 0.249497,
+        "external_center_y": -0.000139,
+        "external_center_z": 0.0,
+        "wire_torsion_scale": 0.598767,
+        "catheter_torsion_scale": 2.152463,
+    }
+    fit = calibrate(design, m, effects, ordered="driven", initial=where_the_diagnosis_ended)
+    intervals = profile_intervals(design, m, fit, list(truth), ordered="driven")
+    for name, value in truth.items():
+        iv = intervals[name]
+        assert iv.lower <= value / field <= iv.upper, (name, fit.estimate[name], iv)
