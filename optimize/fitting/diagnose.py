@@ -454,6 +454,9 @@ def _cause(
         f" and the cross-validated RMSE falls from {before.cv_rmse_mm:.3g} to "
         f"{after.cv_rmse_mm:.3g} mm (BIC {after.bic() - before.bic():+.0f})"
     )
+    if final is not after and not math.isclose(final.cv_rmse_mm, after.cv_rmse_mm, rel_tol=0.05):
+        # refitted later (from another candidate's estimates, or with more effects)
+        text += f" ({final.cv_rmse_mm:.3g} mm in the final model, {final.name})"
     if params:
         text += ", with " + ", ".join(
             f"{k} = {v:.4g} (1 sigma {intervals[k][0]:.3g} to {intervals[k][1]:.3g})"
