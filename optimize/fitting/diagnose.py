@@ -465,7 +465,7 @@ def _cause(
     if field_fixed and set(EFFECT_FREE[name]) & set(FIELD_RELATIVE):
         text += (
             f" (relative to the field's strength, which these data cannot separate from "
-            f"them: a field x % stronger than the design's remanences means them x % "
+            f"them: a field x % stronger than the design's remanences means them about x % "
             f"higher; the intervals include the remanences' tolerance, "
             f"{100 * FIELD_TOLERANCE:.1f} % one sigma)"
         )
