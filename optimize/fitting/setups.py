@@ -9,9 +9,7 @@ Ranges (file units): ring outer diameter 1.5-5 mm, length 0.3-3 mm, face-to-face
 0-3 mm; free length 80-250 mm; catheter and wire Young's moduli 0.2-3 x nominal
 (log-uniform); external magnet diameter 10-80 mm with length / diameter 0.3-3, its face
 8-120 mm from the rest tip and its centre up to 60 mm off the robot's axis, magnetised
-along any direction; gravity absent or along any direction; the mounting pieces printed
-by either process, with their stops at 10-270 deg and the wire pre-twisted -90 to 90 deg
-against the catheter half of the time (:func:`_mounting`).
+along any direction; gravity absent or along any direction.
 """
 
 from __future__ import annotations
@@ -97,25 +95,11 @@ def random_design(
         doc.pop("environment", None)
         if rng.random() < 0.7:
             doc["environment"] = {"gravity_m_s2": [9.81 * c for c in _unit(rng, symmetric)]}
-        doc["tip"]["mounting"] = _mounting(rng.spawn(1)[0])
         try:
             return design_from_dict(doc)
         except DesignError:
             continue
     raise RuntimeError("no valid random design in 1000 draws")
-
-
-def _mounting(rng: np.random.Generator) -> dict[str, object]:
-    """The mounting pieces' process and stops and the wire's pre-twist (file units): the
-    default stops (0-180 deg) and no pre-twist half of the time, else stops at 10-270 deg
-    and a pre-twist of -90 to 90 deg (the paper's rings locked parallel: -40 deg against
-    stops at 180). Drawn from a generator spawned off the design's, which spawning leaves
-    as it was: the draws before this was drawn are the same set-ups. [deg]"""
-    doc: dict[str, object] = {"process": "resin" if rng.random() < 0.5 else "fdm"}
-    if rng.random() < 0.5:
-        doc["stop_angle_deg"] = rng.uniform(10.0, 270.0)
-        doc["pretwist_deg"] = rng.uniform(-90.0, 90.0)
-    return doc
 
 
 def face_distance(design: Design) -> float:
