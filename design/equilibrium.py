@@ -823,6 +823,8 @@ def _ramp(
 
     def predict(cols: np.ndarray) -> None:
         """Targets and predictions for the next step of columns ``cols``."""
+        if cols.size == 0:  # (most iterations: the loop runs on a few columns)
+            return
         target[cols] = np.minimum(lam[cols] + h[cols], 1.0)
         step = (target[cols] - lam[cols])[None, :]
         xs[:, cols] = x[:, cols] + step * tangent[:, cols]
@@ -907,41 +909,46 @@ def _ramp(
             accept[candidate] = converged & good
             refuse[candidate] = converged & ~good
             stalled = cand[~converged & (corrections[cand] >= MAX_CORRECTIONS)]
-            phase[stalled] = _FAIL
-            failure[stalled] = FAILURES["stalled"]
-            accept[np.isin(a, stalled)] = False
+            if stalled.size:
+                phase[stalled] = _FAIL
+                failure[stalled] = FAILURES["stalled"]
+                accept[np.isin(a, stalled)] = False
 
         acc = a[accept]
-        lam_prev[acc] = np.where(tangent[:, acc].any(axis=0), lam[acc], -1.0)
-        tangent_prev[:, acc] = tangent[:, acc]
-        x[:, acc], lam[acc], tangent[:, acc] = xs[:, acc], target[acc], tangent_xs[:, acc]
-        factor = np.sqrt(TARGET_CONTRACTION / np.maximum(contraction[acc], 1e-12))
-        growth = np.where(refused[acc], 1.0, GROWTH)  # no growth right after a refusal
-        h[acc] = np.minimum(h[acc] * np.clip(factor, 1 / SHRINK, growth), max_step)
-        refused[acc] = False
-        phase[acc[lam[acc] >= 1.0]] = _DONE
-        predict(acc[lam[acc] < 1.0])
+        if acc.size:  # (most iterations accept or refuse nothing: skip their bookkeeping)
+            lam_prev[acc] = np.where(tangent[:, acc].any(axis=0), lam[acc], -1.0)
+            tangent_prev[:, acc] = tangent[:, acc]
+            x[:, acc], lam[acc], tangent[:, acc] = xs[:, acc], target[acc], tangent_xs[:, acc]
+            factor = np.sqrt(TARGET_CONTRACTION / np.maximum(contraction[acc], 1e-12))
+            growth = np.where(refused[acc], 1.0, GROWTH)  # no growth right after a refusal
+            h[acc] = np.minimum(h[acc] * np.clip(factor, 1 / SHRINK, growth), max_step)
+            refused[acc] = False
+            phase[acc[lam[acc] >= 1.0]] = _DONE
+            predict(acc[lam[acc] < 1.0])
 
-        ref = a[refuse & (phase[a] == _RUN)]
-        refused[ref] = True
-        with np.errstate(invalid="ignore", divide="ignore"):
-            # Newton's contraction; for a first correction that missed the prediction, how
-            # far it missed (the predictor's error grows with the step's square).
-            theta = np.where(
-                corrections[a] == 0,
-                TARGET_CONTRACTION * sn / near,
-                np.where(np.isfinite(last[a]), sn / last[a], np.inf),
-            )
-            theta = np.where(np.isfinite(theta), theta, np.inf)
-        factor = np.sqrt(TARGET_CONTRACTION / np.maximum(theta[refuse & (phase[a] == _RUN)], 1e-12))
-        h[ref] *= np.clip(factor, 1 / SHRINK, 0.5)
-        phase[ref[h[ref] < MIN_LOAD_STEP]] = _FOLD
-        predict(ref[h[ref] >= MIN_LOAD_STEP])
+        running = phase[a] == _RUN
+        refusing = refuse & running
+        if refusing.any():
+            ref = a[refusing]
+            refused[ref] = True
+            with np.errstate(invalid="ignore", divide="ignore"):
+                # Newton's contraction; for a first correction that missed the prediction,
+                # how far it missed (the predictor's error grows with the step's square).
+                theta = np.where(
+                    corrections[ref] == 0,
+                    TARGET_CONTRACTION * sn[refusing] / near[refusing],
+                    np.where(np.isfinite(last[ref]), sn[refusing] / last[ref], np.inf),
+                )
+                theta = np.where(np.isfinite(theta), theta, np.inf)
+            factor = np.sqrt(TARGET_CONTRACTION / np.maximum(theta, 1e-12))
+            h[ref] *= np.clip(factor, 1 / SHRINK, 0.5)
+            phase[ref[h[ref] < MIN_LOAD_STEP]] = _FOLD
+            predict(ref[h[ref] >= MIN_LOAD_STEP])
 
-        carry_on = ~accept & ~refuse & (phase[a] == _RUN)
+        carry_on = ~accept & ~refuse & running
         go = a[carry_on]
-        first = go[corrections[go] == 1]
-        contraction[first] = sn[carry_on][corrections[go] == 1] / last[first]
+        first = corrections[go] == 1
+        contraction[go[first]] = sn[carry_on][first] / last[go[first]]
         last[go] = sn[carry_on]
         corrections[go] += 1
     return x, phase == _DONE, falls > 0, failure
