@@ -463,7 +463,9 @@ class _Problem:
             x[:, cols], ok[cols] = drive(self.model, p, self.states[cols].T, c, c)
             self.warm_solves += 1
             again = cols[~ok[cols]]
-            if self.state_params is not None:
+            if self.state_params is None:  # (given states: their parameters are unknown)
+                again = again[:0]
+            else:
                 again = again[np.isfinite(self.state_params[again]).all(axis=1)]
             if again.size:
                 x[:, again], ok[again] = self._continued(p, applied, again)

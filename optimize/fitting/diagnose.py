@@ -420,9 +420,11 @@ def _cause(
     final: Fit,
     profiles: Mapping[str, Interval],
     field_fixed: bool,
+    profile_failure: str = "",
 ) -> Cause:
     """The accepted effect ``name`` (``before`` -> ``after``, structure ``s0`` -> ``s1``),
-    its parameters as the ``final`` model estimates them, with their ``profiles``;
+    its parameters as the ``final`` model estimates them, with their ``profiles``
+    (``profile_failure``: why they are NaN, if they could not be found);
     ``field_fixed``: the field's strength was not fitted (those of its parameters in
     FIELD_RELATIVE are then relative to it, and their profiles include its tolerance)."""
     params: dict[str, float] = {}
@@ -457,11 +459,15 @@ def _cause(
     if final is not after and not math.isclose(final.cv_rmse_mm, after.cv_rmse_mm, rel_tol=0.05):
         # refitted later (from another candidate's estimates, or with more effects)
         text += f" ({final.cv_rmse_mm:.3g} mm in the final model, {final.name})"
+
+    def sigma(key: str) -> str:
+        lower, upper = intervals[key]
+        if math.isfinite(lower) and math.isfinite(upper):
+            return f"1 sigma {lower:.3g} to {upper:.3g}"
+        return "1 sigma unknown" + (f": {profile_failure}" if profile_failure else "")
+
     if params:
-        text += ", with " + ", ".join(
-            f"{k} = {v:.4g} (1 sigma {intervals[k][0]:.3g} to {intervals[k][1]:.3g})"
-            for k, v in params.items()
-        )
+        text += ", with " + ", ".join(f"{k} = {v:.4g} ({sigma(k)})" for k, v in params.items())
     if field_fixed and set(EFFECT_FREE[name]) & set(FIELD_RELATIVE):
         text += (
             f" (relative to the field's strength, which these data cannot separate from "
@@ -945,14 +951,16 @@ def diagnose(
     # curved valley (optimize.fitting.likelihood).
     own = [p for step in steps for e in step[0] for p in EFFECT_FREE[e]]
     profiles: dict[str, Interval] = {}
+    profile_failure = ""
     if own:
         say("profile-likelihood intervals of " + ", ".join(own))
         try:
             profiles = profile_intervals(
                 design, m, current.calibration, own, ordered=current.ordered, sigma=sigma
             )
-        except Exception:  # the intervals are then null (JSON) with their reason
+        except Exception as exc:  # the intervals are then null (JSON), the evidence says why
             profiles = {p: Interval(math.nan, math.nan, 0) for p in own}
+            profile_failure = f"the profile likelihood failed ({_reason(exc)})"
     field_fixed = "external_remanence" not in current.calibration.names
     if field_fixed:  # then the data fix these only relative to the field's strength
         estimate = current.calibration.estimate
@@ -961,7 +969,9 @@ def diagnose(
     causes = []
     for added, before, after, s0, s1 in steps:
         for name in added:
-            cause = _cause(design, name, before, after, s0, s1, current, profiles, field_fixed)
+            cause = _cause(
+                design, name, before, after, s0, s1, current, profiles, field_fixed, profile_failure
+            )
             if len(added) > 1:
                 others = ", ".join(a for a in added if a != name)
                 evidence = cause.evidence[:-1] + f" (accepted together with {others}: no single "

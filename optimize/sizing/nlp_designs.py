@@ -64,9 +64,7 @@ def candidate_design(
             )
             robot = replace(robot, **{prefix: tube})
     design = replace(base, name=name or base.name, robot=robot)
-    design = design_with(
-        design, {k: v for k, v in values.items() if k != "external_distance"}
-    )
+    design = design_with(design, {k: v for k, v in values.items() if k != "external_distance"})
     if "external_distance" in values:
         ext = design.external_magnet
         distance = float(values["external_distance"])

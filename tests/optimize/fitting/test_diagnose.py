@@ -251,6 +251,33 @@ def test_a_failing_candidate_is_reported_and_the_diagnosis_goes_on(monkeypatch):
     assert doc["power"]["torsion"]["could_tell_apart"] in (True, False)
 
 
+def test_a_profile_likelihood_that_fails_is_said_in_the_causes_evidence(monkeypatch):
+    """Where the profile likelihood of a cause's parameters fails (a benchmark set did,
+    near field with torsion, when a refit from given states reached an assertion), its
+    intervals are null with their reason in the JSON and the evidence says why, instead
+    of '1 sigma nan to nan'."""
+    import json
+
+    import optimize.fitting.diagnose as dg
+
+    def profile(*args, **options):
+        raise FloatingPointError("planted\nfailure")
+
+    monkeypatch.setattr(dg, "profile_intervals", profile)
+    m = synthesize_data(DEMO, ("gravity",), n=24, noise_mm=0.2, seed=4).measurements
+    result = dg.diagnose(DEMO, m, candidates=("gravity",))
+    assert [c.name for c in result.causes] == ["gravity"]
+    evidence = result.causes[0].evidence
+    assert "1 sigma unknown: the profile likelihood failed (FloatingPointError: planted " in (
+        evidence
+    ), evidence
+    assert "nan" not in evidence, evidence
+    doc = result.to_json()
+    json.dumps(doc, allow_nan=False)
+    reason = doc["null"]["causes[0].interval.tip_mass_g[0]"]
+    assert reason == "the profile likelihood could not be evaluated", doc["null"]
+
+
 @pytest.mark.slow
 def test_a_final_model_that_does_not_predict_held_out_rows_is_reported():
     """A right model predicts the configurations held out of its fit about as well as a
