@@ -1135,31 +1135,24 @@ def drive(
     x: np.ndarray,
     start: np.ndarray,
     end: np.ndarray,
-    origin: np.ndarray | None = None,
-    steps: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Each column's state x (n, N) at commands ``start`` (2, N), driven to ``end`` (2, N)
-    [rad] in equal sub-steps of at most SUBSTEP, and at least ``steps``, each solved by
-    Newton from the state before (contracting by CONTRACTION, ending on the stable side of
-    every fold seen from rest, :func:`_fold_free`, with the rings clear of the external
-    magnet): (the states at ``end``, whether every sub-step did; NaN where not). The
-    batch form of :func:`solve_sequence`'s continuation, without falls: a column that
-    would snap fails. ``origin``: the parameters (k,) or (k, N) [SI] at which x holds at
-    ``start`` (default ``params``); they go to ``params`` with the commands, in the same
-    sub-steps (continuation in the parameters)."""
+    [rad] in equal sub-steps of at most SUBSTEP, each solved by Newton from the state
+    before (contracting by CONTRACTION, ending on the stable side of every fold seen from
+    rest, :func:`_fold_free`, with the rings clear of the external magnet): (the states
+    at ``end``, whether every sub-step did; NaN where not). The batch form of
+    :func:`solve_sequence`'s continuation, without falls: a column that would snap
+    fails."""
     kern = kernels(model)
     n_cols = x.shape[1]
     scale = _scale(model, params, n_cols)
     x = x.copy()
     ok = np.isfinite(x).all(axis=0)
-    n_sub = max(steps, int(np.ceil(np.max(np.abs(end - start), initial=0.0) / SUBSTEP)))
+    n_sub = max(1, int(np.ceil(np.max(np.abs(end - start), initial=0.0) / SUBSTEP)))
     ones = np.ones((1, n_cols))
     tolerance = float(_step_tolerance(model, np.ones(1))[0])
-    target = params if origin is None or params.ndim == origin.ndim else params[:, None]
     for k in range(1, n_sub + 1):
         command = start + (end - start) * (k / n_sub)
-        if origin is not None:
-            params = origin + (target - origin) * (k / n_sub)
         running = ok.copy()
         done = np.zeros(n_cols, bool)
         last = np.full(n_cols, np.inf)

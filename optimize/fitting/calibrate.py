@@ -19,12 +19,7 @@ evaluations of a fit the parameters change little, so each evaluation after the 
 takes every row's state at the fit's current iterate (the lowest cost so far, never a
 rejected trial step's) and solves once by Newton at the new parameters, with the
 checks of :func:`design.equilibrium.drive` (contraction, the stable side of the folds,
-clear of the magnet); where that fails, in WARM_STEPS steps from the state's parameters
-and commands to the new ones (continuation in the parameters: a trust region's step
-can move a state too far for one contracting Newton solve; benchmark set [8, 3, 0], 36
-rows, torsion planted: 2300 of 3500 rows ramped in warm evaluations were such, and the
-diagnosis took 21 s in one process instead of 26); rows that fail still go through the
-ramp. A state the ramp reached by a
+clear of the magnet); rows that fail go through the ramp. A state the ramp reached by a
 fall (``snapped``) is warm-started too: near a fold the ramp may fall elsewhere at the
 new parameters, which the check of the answer below finds (solving such rows by the
 ramp at every evaluation cost a third of the time of fits of the large-deflection rod,
@@ -123,11 +118,6 @@ estimated from the residuals). [m]"""
 WARM_RETRIES = 1
 """Fits made again from the start with warm starts, the rows whose warm start went
 elsewhere by the ramp, before one with every row by the ramp."""
-WARM_STEPS = 4
-"""Where a row's one Newton solve from its last state fails (it does not contract: the
-state moves far or nonlinearly for the parameters' step), the parameters and the
-commands go from that state's to the new ones in this many equal steps, a Newton solve
-each, before the row goes through the ramp. [-]"""
 WARM_TOLERANCE = 1e-3
 """The warm-started states of a fit's answer are the ramp's where every fitted row's tip
 lies within this fraction of its sigma of the ramp's (else the fit goes on with the
@@ -378,9 +368,6 @@ class _Problem:
         # the ramp, :meth:`settle`).
         self.warm = True
         self.states: np.ndarray | None = None
-        self.state_params: np.ndarray | None = None  # (N, parameters): each state's [SI]
-        self.state_applied: np.ndarray | None = None  # (N, 2): each state's commands [rad]
-        self._cache_params: np.ndarray | None = None
         self.best_cost = np.inf
         self.ramp_only = np.zeros(len(m), bool)  # rows whose warm start went elsewhere
         self._warm_cached = False
@@ -437,18 +424,17 @@ class _Problem:
                 pred = predict(self.model, p, self.m, self.ordered)
             out, d_out = prediction_sensitivities(self.model, p, pred)
             self.evaluations += 1
-            self._key, self._cache, self._cache_params = key, (out, d_out, pred), p
+            self._key, self._cache = key, (out, d_out, pred)
         return self._cache
 
     def _warm_prediction(self, p: np.ndarray) -> Prediction | None:
         """The prediction at ``p`` from each row's last state: one Newton solve each with
         the checks of :func:`design.equilibrium.drive` (contraction, stable side of the
-        folds, clear of the magnet), where that fails WARM_STEPS solves along the way from
-        the state's parameters and commands (continuation in the parameters). Rows solved
-        on their own whose solves fail, that have no last state, or whose warm start went
-        elsewhere before (``ramp_only``), go through the load ramp. None along a path
-        (where a row's state depends on the rows before it and on where the path
-        snapped): the path is followed again by :func:`predict`."""
+        folds, clear of the magnet). Rows solved on their own whose solve fails, that have
+        no last state, or whose warm start went elsewhere before (``ramp_only``), go
+        through the load ramp. None along a path (where a row's state depends on the rows
+        before it and on where the path snapped): the path is followed again by
+        :func:`predict`."""
         assert self.states is not None
         if not self.on_their_own:
             return None
@@ -462,13 +448,6 @@ class _Problem:
             c = applied[cols].T
             x[:, cols], ok[cols] = drive(self.model, p, self.states[cols].T, c, c)
             self.warm_solves += 1
-            again = cols[~ok[cols]]
-            if self.state_params is None:  # (given states: their parameters are unknown)
-                again = again[:0]
-            else:
-                again = again[np.isfinite(self.state_params[again]).all(axis=1)]
-            if again.size:
-                x[:, again], ok[again] = self._continued(p, applied, again)
         nan3 = np.full((n, 3), np.nan)
         eq = Equilibria(
             command=self.m.command.copy(),
@@ -491,18 +470,6 @@ class _Problem:
                 if name != "command":
                     getattr(eq, name)[ramp] = value
         return Prediction(eq, applied, d_applied)
-
-    def _continued(
-        self, p: np.ndarray, applied: np.ndarray, rows: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The states (n, len(rows)) of ``rows`` at parameters ``p`` and commands
-        ``applied`` (N, 2), driven from their last states with their parameters and
-        commands in WARM_STEPS steps (NaN where a step fails), and whether each arrived."""
-        assert self.states is not None
-        assert self.state_params is not None and self.state_applied is not None
-        start, end = self.state_applied[rows].T, applied[rows].T
-        origin = self.state_params[rows].T
-        return drive(self.model, p, self.states[rows].T, start, end, origin, WARM_STEPS)
 
     def settle(self, u: np.ndarray, tolerance: float) -> np.ndarray:
         """The fitted rows (shape (N,) bool) whose warm-started state at u is not the
@@ -539,18 +506,11 @@ class _Problem:
         if cost >= self.best_cost or self._cache is None:
             return
         self.best_cost = cost
-        pred = self._cache[2]
-        eq = pred.equilibria
-        n = len(self.m)
+        eq = self._cache[2].equilibria
         if self.states is None:
-            self.states = np.full_like(eq.unknowns, np.nan)
-        if self.state_params is None or self.state_applied is None:  # (given states: unknown)
-            self.state_params = np.full((n, self.base.size), np.nan)
-            self.state_applied = np.full((n, 2), np.nan)
-        ok = eq.converged
-        self.states[ok] = eq.unknowns[ok]
-        self.state_params[ok] = self._cache_params
-        self.state_applied[ok] = pred.applied[ok]
+            self.states = eq.unknowns.copy()
+        else:
+            self.states[eq.converged] = eq.unknowns[eq.converged]
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         _, d_out, _ = self.evaluate(u)

@@ -34,7 +34,7 @@ from oracle import (
 from setups import EFFECT_SETS, random_design
 
 from design.designfile import load_design
-from design.equilibrium import drive, solve_equilibria, stable_states
+from design.equilibrium import solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
 from design.mounting import MAX_STOP_ANGLE, PROCESSES
 from design.records import Design, Environment, Mounting
@@ -330,49 +330,3 @@ def test_near_magnet_case_gives_the_states_reached_by_bringing_the_magnet_up():
     c, s = np.cos(phi), np.sin(phi)
     rotation = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
     np.testing.assert_allclose(turned.position, eq.position @ rotation.T, atol=1e-9)
-
-
-DRIVEN = (
-    ("magnet_remanence", 0.2),
-    ("external_remanence", 0.2),
-    ("bending_rigidity_scale", 0.3),
-    ("wire_torsion_scale", 0.5),
-    ("catheter_torsion_scale", 0.5),
-)
-"""Parameters changed for the continuation test, each by a factor exp(+-this)."""
-
-
-@pytest.mark.parametrize("seed", range(7700, 7730))
-def test_states_driven_through_a_change_of_parameters_are_that_robots_and_come_back(seed):
-    """Continuation in the parameters (design.equilibrium.drive with ``origin``: the warm
-    starts of calibration) from the load ramp's states of one robot to another around it
-    (remanences, bending and torsional rigidity changed by random factors): every state
-    that arrives is a converged, stable equilibrium of the other robot by the exact check,
-    arrives the same in twice the steps, and driven back (in finer steps: Newton's
-    contraction is not symmetric, seed 7709 needs 16) returns to where it started (one
-    branch followed both ways); where neither robot's ramp snapped, it is the other
-    robot's own state (the state is the load ramp's)."""
-    design, effects, commands = draw(seed, commands=12, stops=False)
-    why = f"seed {seed}, {sorted(effects)}"
-    model = model_for(effects)
-    before = model.parameters(design)
-    rng = np.random.default_rng([seed, 1])
-    after = before.copy()
-    for name, spread in DRIVEN:
-        after[index(name)] *= np.exp(rng.uniform(-spread, spread))
-    c = commands.T
-    ramp0 = solve_equilibria(model, before, c[0], c[1])
-    ramp1 = solve_equilibria(model, after, c[0], c[1])
-    x0 = np.where(ramp0.converged[None, :], ramp0.unknowns.T, np.nan)
-    x1, arrived = drive(model, after, x0, c, c, origin=before, steps=4)
-    fine, arrived_fine = drive(model, after, x0, c, c, origin=before, steps=8)
-    back, returned = drive(model, before, x1, c, c, origin=after, steps=64)
-    assert arrived.any() or not ramp0.converged.any(), why
-    a = np.flatnonzero(arrived)
-    assert stable_states(model, after, x1[:, a], c[:, a]).all(), why
-    np.testing.assert_array_equal(arrived_fine[a], True, err_msg=why)
-    np.testing.assert_allclose(fine[:, a], x1[:, a], atol=1e-8, err_msg=why)
-    np.testing.assert_array_equal(returned[a], True, err_msg=why)
-    np.testing.assert_allclose(back[:, a], x0[:, a], atol=1e-8, err_msg=why)
-    plain = a[~ramp0.snapped[a] & ~ramp1.snapped[a] & ramp1.converged[a]]
-    np.testing.assert_allclose(x1[:, plain], ramp1.unknowns[plain].T, atol=1e-8, err_msg=why)

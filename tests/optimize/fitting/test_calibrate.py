@@ -456,11 +456,11 @@ def test_a_fold_started_from_the_full_fits_states_is_that_fold(monkeypatch, seed
 
 def test_a_fit_from_given_states_far_from_its_start_is_the_fit_without_them(demonstrator):
     """Rows' states given to a fit (a fold or a profile refit starts from the full fit's)
-    whose one Newton solve at the start fails go through the ramp, as they have no
-    parameters to be continued from (a profile refit of benchmark set [2, 7, 0] failed on
-    that, and the diagnosis reported no intervals): torsion data, the states of a fit of
-    them, a start with the transmissions 4x stiffer; the answer is the fit's without the
-    states."""
+    whose one Newton solve at the start fails go through the ramp (a trial version that
+    continued warm rows in the parameters failed on given states, whose parameters are
+    unknown, and benchmark set [2, 7, 0] then reported no intervals): torsion data, the
+    states of a fit of them, a start with the transmissions 4x stiffer; the answer is the
+    fit's without the states."""
     truth = {"wire_torsion_scale": 0.5, "catheter_torsion_scale": 0.6}
     m = synthesize(demonstrator, ["torsion"], n=24, noise_mm=0.3, seed=24, params_override=truth)
     fit = calibrate(demonstrator, m, ("torsion",))
