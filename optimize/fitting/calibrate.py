@@ -29,8 +29,12 @@ often enough to cost more than they saved). The fit's answer is then solved by t
 ramp itself, and where any fitted row's tip differs
 from the warm-started one by more than WARM_TOLERANCE of its sigma, or has a state in one
 and none in the other, the fit is made again from its start with those rows by the ramp
-(WARM_RETRIES times, then every row by the ramp). The returned result is always the
-ramp's.
+(WARM_RETRIES times, then every row by the ramp). Where that start sits on a symmetric
+bifurcation (the magnet on the robot's axis, the offsets free at zero), every step of the
+fit again may tip those rows to the other side, and it stays far above the first answer;
+then it is also fitted from the first answer with one or two of its parameters back at the
+start, from the one of these points where the ramp fits best, and the better fit is kept.
+The returned result is always the ramp's.
 
 Identifiability, said plainly: without gravity or torsion the baseline's tip pose
 depends on the external remanence and the bending rigidity only through their ratio, so
@@ -45,6 +49,7 @@ millimetres.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Iterable, Mapping, Sequence
@@ -52,7 +57,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import OptimizeResult, least_squares
 
 from design.equilibrium import Equilibria, drive, solve_equilibria
 from design.geometry import rest_position
@@ -220,6 +225,17 @@ class UnsolvedStart(ValueError):
     """Too few configurations have an equilibrium where a fit would start."""
 
 
+def _mixes(u: np.ndarray, start: np.ndarray) -> list[np.ndarray]:
+    """u itself, and u with each one and each two of its parameters set to the start's."""
+    mixes = [u.copy()]
+    for size in (1, 2):
+        for cols in itertools.combinations(range(len(u)), size):
+            v = u.copy()
+            v[list(cols)] = start[list(cols)]
+            mixes.append(v)
+    return mixes
+
+
 def _wrap(angle: np.ndarray) -> np.ndarray:
     return (angle + np.pi) % (2 * np.pi) - np.pi
 
@@ -371,6 +387,8 @@ class _Problem:
         self.best_cost = np.inf
         self.ramp_only = np.zeros(len(m), bool)  # rows whose warm start went elsewhere
         self._warm_cached = False
+        # The ramp's solve at the point :meth:`ramp_cost` saw last (settle reuses it).
+        self._ramp: tuple[bytes, tuple[np.ndarray, np.ndarray, Prediction]] | None = None
         self.warm_solves = 0
         # predict solves rows on their own (the ramp) unless it follows the path
         ordered = "hysteresis" in model.effects if ordered is None else ordered
@@ -420,11 +438,14 @@ class _Problem:
             if self.warm and not cold and self.states is not None:
                 pred = self._warm_prediction(p)
             self._warm_cached = pred is not None
-            if pred is None:
-                pred = predict(self.model, p, self.m, self.ordered)
-            out, d_out = prediction_sensitivities(self.model, p, pred)
-            self.evaluations += 1
-            self._key, self._cache = key, (out, d_out, pred)
+            if pred is None and self._ramp is not None and self._ramp[0] == key:
+                solved = self._ramp[1]
+            else:
+                if pred is None:
+                    pred = predict(self.model, p, self.m, self.ordered)
+                solved = (*prediction_sensitivities(self.model, p, pred), pred)
+                self.evaluations += 1
+            self._key, self._cache = key, solved
         return self._cache
 
     def _warm_prediction(self, p: np.ndarray) -> Prediction | None:
@@ -486,7 +507,23 @@ class _Problem:
         return other & self.fit
 
     def residuals(self, u: np.ndarray) -> np.ndarray:
-        out, _, _ = self.evaluate(u)
+        r = self._residual_vector(u, self.evaluate(u)[0])
+        self._keep_states(float(r @ r))
+        return r
+
+    def ramp_cost(self, u: np.ndarray) -> float:
+        """The weighted sum of squares at u with every row by :func:`predict` (the one
+        definition of the state), outside the cache and the warm starts. [-]"""
+        key = np.asarray(u, float).tobytes()
+        if self._ramp is None or self._ramp[0] != key:
+            p = self.params(u)
+            pred = predict(self.model, p, self.m, self.ordered)
+            self._ramp = key, (*prediction_sensitivities(self.model, p, pred), pred)
+            self.evaluations += 1
+        r = self._residual_vector(u, self._ramp[1][0])
+        return float(r @ r)
+
+    def _residual_vector(self, u: np.ndarray, out: np.ndarray) -> np.ndarray:
         r_pos = (out[:, :3] - self.m.position) / self.sigma[:, None]
         r_pos = np.where(np.isfinite(r_pos), r_pos, self.fail_offset / self.sigma[:, None])
         r_ang = _wrap(out[:, 3:] - self.m.tip_angles) / TIP_ANGLE_SIGMA
@@ -494,9 +531,7 @@ class _Problem:
         parts = [r_pos[self.pos_mask], r_ang[self.ang_mask]]
         rows = np.isfinite(self.prior_width)
         parts.append((u[rows] - self.prior_centre[rows]) / self.prior_width[rows])
-        r = np.concatenate(parts)
-        self._keep_states(float(r @ r))
-        return r
+        return np.concatenate(parts)
 
     def _keep_states(self, cost: float) -> None:
         """Keep the cached solve's states as the warm starts if its cost is the lowest so
@@ -638,16 +673,20 @@ def calibrate(
     noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
     passes = 2 if priors and not noise_known else 1
     u_start = u0.copy()
-    for attempt in range(passes):
-        sol = least_squares(
+
+    def solve(u_from: np.ndarray) -> OptimizeResult:
+        return least_squares(
             prob.residuals,
-            u0,
+            u_from,
             jac=prob.jacobian,
             bounds=(lo, hi),
             method="trf",
             x_scale=1.0,
             max_nfev=max_nfev or 50 * (len(names) + 1),
         )
+
+    for attempt in range(passes):
+        sol = solve(u0)
         u0 = sol.x
         if attempt + 1 < passes:
             r = prob.residuals(sol.x)[: prob.n_data()]
@@ -655,6 +694,7 @@ def calibrate(
             prob.invalidate()
     u = sol.x
     tolerance = WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))
+    second_start = False
     for retry in range(WARM_RETRIES + 1):
         other = prob.settle(u, tolerance) if prob.warm else np.zeros(len(m), bool)
         if not other.any():
@@ -662,20 +702,31 @@ def calibrate(
         # The warm starts followed other states than the ramp's (e.g. a state that
         # persists at full load where the ramp from rest is pulled into the magnet): the
         # fit again from its start, those rows by the ramp (at last every row).
+        warm_u, warm_cost = u, 2 * float(sol.cost)
         prob.ramp_only |= other
         prob.warm = retry < WARM_RETRIES
         prob.invalidate()
-        sol = least_squares(
-            prob.residuals,
-            u_start,
-            jac=prob.jacobian,
-            bounds=(lo, hi),
-            method="trf",
-            x_scale=1.0,
-            max_nfev=max_nfev or 50 * (len(names) + 1),
-        )
+        sol = solve(u_start)
         u = sol.x
         restarted = True
+        # From a start on a symmetric bifurcation (an off-axis offset the fit frees at
+        # zero) every step of the restart may tip rows to the other side: it then stays
+        # far above the warm answer. The warm answer with some of its parameters back at
+        # the start may lie where the ramp reaches the data's states: fit from the best
+        # such point too and keep the better.
+        kept = prob.ramp_cost(u)
+        if kept - warm_cost > len(names) * warm_cost / dof:
+            states, best = prob.states, prob.best_cost
+            mixes = _mixes(warm_u, u_start)
+            costs = [prob.ramp_cost(v) for v in mixes]
+            if min(costs) < kept:
+                prob.invalidate()
+                other_sol = solve(mixes[int(np.argmin(costs))])
+                if prob.ramp_cost(other_sol.x) < kept:
+                    sol, u, second_start = other_sol, other_sol.x, True
+                else:
+                    prob.invalidate()
+                    prob.states, prob.best_cost = states, best
     out, _, pred = prob.evaluate(u, cold=True)
     p = prob.params(u)
     r_data = prob.residuals(u)[: prob.n_data()]
@@ -702,6 +753,11 @@ def calibrate(
         message += (
             f"; fitted again from the start with {int(prob.ramp_only.sum())} row(s) by the "
             "load ramp (their warm starts had followed other states)"
+        )
+    if second_start:
+        message += (
+            "; better from the first answer with some parameters back at the start "
+            "(the start lies where the ramp tips those rows to other states)"
         )
     rank = int(determined.sum())
     if rank < len(names):
