@@ -32,7 +32,7 @@ given only the nominal design file and the data. Prints, per planted set and ove
   on disk), which is not the diagnosis' cost.
 
     python benchmarks/diagnose.py --random 2 [--seed 0] [--only torsion,null] [--serial]
-        [--jsonl out.jsonl]
+        [--on-axis] [--jsonl out.jsonl]
     python benchmarks/diagnose.py --summary out.jsonl   # the figures of earlier rows
 
 The baseline it is judged against is the calibrated paper model the diagnosis starts
@@ -308,6 +308,12 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma-separated planted sets (e.g. torsion,null)")
     ap.add_argument("--jsonl", type=Path, help="append one JSON row per diagnosis here")
     ap.add_argument(
+        "--on-axis",
+        action="store_true",
+        help="every nominal design with its magnet on the robot's axis, magnetised along it "
+        "(the paper's arrangement; symmetric set-ups, which the drawn positions almost never are)",
+    )
+    ap.add_argument(
         "--summary", type=Path, help="only print the figures of the rows of this --jsonl file"
     )
     ap.add_argument(
@@ -345,7 +351,7 @@ def main() -> None:
                 rng = np.random.default_rng([args.seed, i, j])
                 label = "+".join(sorted(planted)) or "null"
                 bar.update(task, description=f"{label} #{j + 1}: drawing")
-                case = draw_planted(rng, planted)
+                case = draw_planted(rng, planted, on_axis=args.on_axis)
                 bar.update(task, description=f"{label} #{j + 1}: diagnosing")
                 try:
                     result, seconds, cpu = timed(case, j)
@@ -387,7 +393,7 @@ def main() -> None:
                     with args.jsonl.open("a") as f:
                         f.write(json.dumps(row, default=float) + "\n")
                 bar.advance(task)
-    report(rows, f"--random {args.random} --seed {args.seed}")
+    report(rows, f"--random {args.random} --seed {args.seed}" + " --on-axis" * args.on_axis)
 
 
 def report(rows: dict[str, list[dict]], title: str) -> None:

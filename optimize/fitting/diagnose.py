@@ -63,6 +63,8 @@ from optimize.fitting.calibrate import (
     FIELD_RELATIVE,
     FIELD_TOLERANCE,
     FREE_PARAMETERS,
+    NESTED_START,
+    SOFT_START,
     CalibrationResult,
     UnsolvedStart,
     calibrate,
@@ -96,18 +98,6 @@ BIC_DROP = 10.0
 strong evidence)."""
 CV_GAIN = 0.03
 """... and its cross-validated RMSE falls by more than this fraction."""
-NESTED_START = {"wire_torsion_scale": 10.0, "catheter_torsion_scale": 10.0}
-"""A candidate is also started where it all but reduces to the current model (here:
-transmissions 10 times stiffer than nominal, nearly rigid, the baseline's assumption; the
-nominal value can lie beyond a snap-through of the rings from the data's branch, where
-a local fit cannot come back from)."""
-SOFT_START = {"wire_torsion_scale": 0.5, "catheter_torsion_scale": 0.5}
-"""... and on the other side of nominal (transmissions twice as compliant): driven along a
-path, soft transmissions let the rings lag and snap where stiffer ones do not, a basin of
-its own that fits from nominal or stiffer starts do not reach (seed [5, 13, 0], gravity
-and torsion planted, wire 0.41 x nominal GJ: from nominal and stiffer starts the misfit
-stayed 11 times the noise's, and friction play was named to absorb the rest; from the
-nominal design with these it is the noise's)."""
 SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 """Factors on each positive (log-fitted) parameter, alone and with the others of its
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""

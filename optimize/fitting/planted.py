@@ -3,7 +3,9 @@
 For the diagnosis benchmark (``benchmarks/diagnose.py``) and its tests: each data set is
 a nominal design file drawn by :func:`optimize.fitting.setups.random_design`, a robot as
 built that differs from it, the planted effects at random strengths, and a bench run of
-that truth (:func:`optimize.fitting.synth.synthesize_data`) with tracker noise.
+that truth (:func:`optimize.fitting.synth.synthesize_data`) with tracker noise. On
+request (``on_axis``) the nominal design has its magnet on the robot's axis, magnetised
+along it, as in the paper's set-up (:func:`optimize.fitting.setups.on_axis`).
 
 As built (drawn for every data set, null ones too): each tube's Young's modulus within
 +-30 % of the file's (bending and twisting stiffness alike), each magnet's remanence
@@ -47,6 +49,7 @@ from design.units import DEG, MM
 from optimize.fitting.diagnose import DETECTABLE, _fit
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.setups import FACE_MM, random_design
+from optimize.fitting.setups import on_axis as put_on_axis
 from optimize.fitting.synth import VIEWS, Synthetic, synthesize_data
 
 PLANTABLE = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
@@ -80,6 +83,8 @@ class Planted:
     view, ordered, stated_sigma : 3-D or top view; with ``sequence``; with ``sigma_mm``.
     margin : per planted effect, the detectability margin (module docstring). [-]
     tries : draws it took.
+    on_axis : the nominal design has its magnet on the robot's axis
+        (:func:`optimize.fitting.setups.on_axis`; as built it is off by the offsets).
     """
 
     design: Design
@@ -92,6 +97,7 @@ class Planted:
     stated_sigma: bool
     margin: dict[str, float]
     tries: int
+    on_axis: bool = False
 
     @property
     def measurements(self) -> Measurements:
@@ -111,7 +117,9 @@ class Planted:
         d = self.design
         margins = ", ".join(f"{k} {v:.2g}" for k, v in sorted(self.margin.items()))
         return (
-            f"{self.name}: L {d.robot.free_length / MM:.0f} mm, {len(self.measurements)} rows, "
+            f"{self.name}: L {d.robot.free_length / MM:.0f} mm, "
+            + ("magnet on axis, " if self.on_axis else "")
+            + f"{len(self.measurements)} rows, "
             f"{self.view}, {'sequence' if self.ordered else 'no sequence'}, noise "
             f"{self.noise_mm:.2f} mm" + (f", margin {margins}" if margins else "")
         )
@@ -171,14 +179,18 @@ def draw_planted(
     planted: frozenset[str],
     tries: int = 6,
     points: tuple[int, int] = POINTS,
+    on_axis: bool = False,
 ) -> Planted:
     """A bench data set with ``planted`` effects (module docstring), drawn again until it
     is detectable, at most ``tries`` times (the last draw is returned either way).
-    ``points``: the range of commanded configurations, within POINTS."""
+    ``points``: the range of commanded configurations, within POINTS. ``on_axis``: the
+    nominal design's magnet on the robot's axis (:func:`optimize.fitting.setups.on_axis`)."""
     case = None
     for attempt in range(1, tries + 1):
         face = NEAR_FACE_MM if "near_field" in planted else FACE_MM
         design = random_design(rng, face_mm=face)
+        if on_axis:
+            design = put_on_axis(rng, design, face)
         if "gravity" in planted and design.environment.gravity is None:
             g = rng.normal(size=3)
             gravity = tuple(9.81 * g / np.linalg.norm(g))
@@ -203,7 +215,9 @@ def draw_planted(
         )
         if len(synthetic.measurements) < MIN_ROWS:
             continue
-        case = Planted(design, planted, truth, synthetic, noise, view, ordered, stated, {}, attempt)
+        case = Planted(
+            design, planted, truth, synthetic, noise, view, ordered, stated, {}, attempt, on_axis
+        )
         case = dataclasses.replace(case, margin=margins(case))
         if case.detectable:
             return case

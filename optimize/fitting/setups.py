@@ -9,7 +9,10 @@ Ranges (file units): ring outer diameter 1.5-5 mm, length 0.3-3 mm, face-to-face
 0-3 mm; free length 80-250 mm; catheter and wire Young's moduli 0.2-3 x nominal
 (log-uniform); external magnet diameter 10-80 mm with length / diameter 0.3-3, its face
 8-120 mm from the rest tip and its centre up to 60 mm off the robot's axis, magnetised
-along any direction; gravity absent or along any direction.
+along any direction; gravity absent or along any direction. :func:`on_axis` puts the
+magnet on the robot's axis, magnetised along it (the paper's arrangement): a set-up that
+is its own mirror image in every plane through the axis but for gravity, where the
+robot's states meet symmetric bifurcations; drawn positions almost never are.
 """
 
 from __future__ import annotations
@@ -100,6 +103,20 @@ def random_design(
         except DesignError:
             continue
     raise RuntimeError("no valid random design in 1000 draws")
+
+
+def on_axis(
+    rng: np.random.Generator, design: Design, face_mm: tuple[float, float] = FACE_MM
+) -> Design:
+    """``design`` with its external magnet (a cylinder) on the robot's axis, magnetised
+    along it towards or away from the robot, its face drawn ``face_mm`` from the rest tip
+    (module docstring). [mm]"""
+    doc = design_to_dict(design)
+    ext = doc["external_magnet"]
+    face = rng.uniform(*face_mm)
+    ext["center_mm"] = [design.robot.free_length / MM + face + ext["length_mm"] / 2, 0.0, 0.0]
+    ext["magnetization"] = [1.0 if rng.random() < 0.5 else -1.0, 0.0, 0.0]
+    return design_from_dict(doc)
 
 
 def face_distance(design: Design) -> float:
