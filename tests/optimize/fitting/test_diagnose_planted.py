@@ -4,7 +4,8 @@ planted data sets (:mod:`optimize.fitting.planted`, ``benchmarks/diagnose.py``).
 Each case draws a nominal design from the whole design space, a robot as built that
 differs from it, the planted effects and a bench run with noise; the diagnosis gets only
 the design file and the data, written as a data-set folder and read back (as a user's).
-Two data sets per effect, two pairs and two null sets; the sample keeps to 16-30
+Two data sets per effect, two pairs and two null sets, and a null set, torsion and
+torsion with gravity with the magnet on the robot's axis; the sample keeps to 16-30
 configurations to fit CI's time (the benchmark draws 16-80). The generator's criterion
 makes every planted effect detectable (the best model without it leaves at least
 DETECTABLE noise sigmas per coordinate on the noise-free data); a case that is not says
@@ -41,15 +42,27 @@ PAIRS = (frozenset({"torsion", "gravity"}), frozenset({"near_field", "large_defl
 CASES = [(frozenset(), j) for j in range(2)]
 CASES += [(frozenset({e}), j) for e in PLANTABLE for j in range(2)]
 CASES += [(pair, 0) for pair in PAIRS]
+ON_AXIS = [frozenset(), frozenset({"torsion"}), frozenset({"torsion", "gravity"})]
+"""... and three with the magnet on the robot's axis (the paper's arrangement, symmetric:
+:func:`optimize.fitting.setups.on_axis`), numbered from ON_AXIS_NUMBER."""
+ON_AXIS_NUMBER = 10
+CASES += [(p, ON_AXIS_NUMBER) for p in ON_AXIS]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("planted", "number"), CASES, ids=[f"{'+'.join(sorted(p)) or 'null'}-{j}" for p, j in CASES]
+    ("planted", "number"),
+    CASES,
+    ids=[
+        f"{'+'.join(sorted(p)) or 'null'}-{'on-axis' if j >= ON_AXIS_NUMBER else j}"
+        for p, j in CASES
+    ],
 )
 def test_the_planted_effects_are_named_and_nothing_else(planted, number, tmp_path):
     seed = [SEED, PLANTED_SETS.index(planted), number]
-    case = draw_planted(np.random.default_rng(seed), planted, points=POINTS)
+    case = draw_planted(
+        np.random.default_rng(seed), planted, points=POINTS, on_axis=number >= ON_AXIS_NUMBER
+    )
     why = f"seed {seed}: {case.describe()}"
     assert case.detectable, f"not detectable after {case.tries} draws: {why}"
     design, m = load_dataset(save_dataset(tmp_path / "set", case.design, case.measurements))
