@@ -106,6 +106,7 @@ __all__ = [
     "Prediction",
     "calibrate",
     "calibrate_from_starts",
+    "stiff_start",
     "configuration_folds",
     "cross_validate",
     "default_free",
@@ -824,6 +825,29 @@ def calibrate(
     )
 
 
+def stiff_start(
+    design: Design,
+    m: Measurements,
+    effects: Iterable[str],
+    free: Sequence[str],
+    initial: Mapping[str, float] | None = None,
+    **options: Any,
+) -> dict[str, float] | None:
+    """Where a fit of ``effects`` with ``free`` torsion scales also starts: the other free
+    parameters fitted (from ``initial``, ``options`` of :func:`calibrate`) with the
+    transmissions held nearly rigid (NESTED_START, the baseline's assumption), and the
+    transmissions there; None where no torsion scale is free."""
+    stiff = {n: v for n, v in NESTED_START.items() if n in free}
+    if not stiff:
+        return None
+    others = [n for n in free if n not in stiff]
+    held = {n: v for n, v in (initial or {}).items() if n in others}
+    if others:
+        fit = calibrate(design, m, effects, others, fixed=stiff, initial=held or None, **options)
+        held = fit.estimate
+    return {**held, **stiff}
+
+
 def calibrate_from_starts(
     design: Design,
     m: Measurements,
@@ -834,24 +858,19 @@ def calibrate_from_starts(
     """:func:`calibrate` (``options`` are its own) from the nominal design and, where
     torsion scales are free, also from stiff and from soft transmissions: a local fit
     cannot cross a snap-through of the rings, and which side of one the nominal design
-    lies on is chance. 'stiff': the other parameters fitted first with the transmissions
-    nearly rigid (NESTED_START, the baseline's assumption), then everything from there;
-    'soft': from the nominal design with SOFT_START. Magnet on the robot's axis, torsion
-    data drawn from the design space (``optimize.fitting.planted``, 15 sets): from the
-    nominal design alone 5 fits ended at 1.7-15 times the noise's RMS, from these three
-    starts 3 at 1.7-9 times (one of them data along a path, which only a fit that follows
-    it can match; the diagnosis does). Returns the best (every fitted row solved, then
-    the least chi-square) and the fit from each start by name."""
+    lies on is chance. 'stiff': :func:`stiff_start`; 'soft': the nominal design with
+    SOFT_START. Magnet on the robot's axis, torsion data drawn from the design space
+    (``optimize.fitting.planted``, 15 sets): from the nominal design alone 5 fits ended at
+    1.7-15 times the noise's RMS, from these three starts 3 at 1.7-9 times (one of them
+    data along a path, which only a fit that follows it can match; the diagnosis does).
+    Returns the best (every fitted row solved, then the least chi-square) and the fit
+    from each start by name."""
     names = default_free(effects) if free is None else tuple(free)
     fits = {"nominal": calibrate(design, m, effects, names, **options)}
-    stiff = {n: v for n, v in NESTED_START.items() if n in names}
-    if stiff:
-        others = [n for n in names if n not in stiff]
-        held = (
-            calibrate(design, m, effects, others, fixed=stiff, **options).estimate if others else {}
-        )
-        fits["stiff"] = calibrate(design, m, effects, names, initial={**held, **stiff}, **options)
-        soft = {n: SOFT_START[n] for n in stiff}
+    stiff = stiff_start(design, m, effects, names, **options)
+    if stiff is not None:
+        fits["stiff"] = calibrate(design, m, effects, names, initial=stiff, **options)
+        soft = {n: SOFT_START[n] for n in NESTED_START if n in names}
         fits["soft"] = calibrate(design, m, effects, names, initial=soft, **options)
     best = min(fits.values(), key=lambda f: (f.unconverged > 0, f.chi2))
     return best, fits
