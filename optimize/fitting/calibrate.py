@@ -732,7 +732,8 @@ def calibrate(
         # such point too and keep the better.
         kept = prob.ramp_cost(u)
         if kept - warm_cost > len(names) * warm_cost / dof:
-            states, best = prob.states, prob.best_cost
+            states = None if prob.states is None else prob.states.copy()
+            best = prob.best_cost
             mixes = _mixes(warm_u, u_start)
             costs = [prob.ramp_cost(v) for v in mixes]
             if min(costs) < kept:
