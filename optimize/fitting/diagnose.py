@@ -71,6 +71,7 @@ from optimize.fitting.calibrate import (
     calibrate,
     cross_validate,
     default_free,
+    path_matters,
     predict,
     row_sigma,
     stiff_start,
@@ -165,18 +166,6 @@ def _fit(
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
-    def path_matters(params: np.ndarray) -> bool:
-        """Twisting transmissions, or a strong magnet near the tip, can make the robot
-        multistable; then its state depends on the path driven. The fast solve (each
-        configuration on its own, or the played commands in one batch) is exact only
-        where driving the bench's path ends in the same states."""
-        if m.sequence is None:
-            return False
-        fast = predict(model, params, m, ordered=mode).equilibria.position
-        driven = predict(model, params, m, ordered="driven").equilibria.position
-        same_solved = np.array_equal(np.isnan(fast), np.isnan(driven))
-        return not (same_solved and np.nanmax(np.abs(fast - driven), initial=0.0) < 1e-6)
-
     options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev}
     if max_nfev is not None:  # a screen: skip starts where most rows have no state
         options["min_solved"] = MIN_SOLVED
@@ -206,13 +195,13 @@ def _fit(
         except UnsolvedStart as exc:
             skipped.append(exc)
             continue
-        if path_matters(cal.params):
+        if path_matters(model, cal.params, m, mode):
             cal, path = fit({n: cal.estimate[n] for n in free}, "driven")
         fits.append((cal, path))
         start_params = model.parameters(design)
         for n, v in (initial or {}).items():
             start_params[index(n)] = v
-        if path_matters(start_params):
+        if path_matters(model, start_params, m, mode):
             fits.append(fit(initial, "driven"))
     if not fits:
         raise skipped[0]

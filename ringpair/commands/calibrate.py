@@ -68,7 +68,8 @@ def calibrate(
 
     The fit starts from the nominal design; with torsion also from stiff and from soft
     transmissions (a local fit cannot cross a snap-through of the rings), and the best
-    is kept."""
+    is kept. Data with a sequence are also fitted along their path where driving it ends
+    in other states (a multistable robot)."""
     from optimize.fitting.calibrate import FREE_PARAMETERS, calibrate_from_starts, default_free
     from optimize.fitting.likelihood import profile_intervals
 
@@ -128,9 +129,14 @@ def calibrate(
     )
     if len(tried) > 1:
         console.print(
-            f"best of {len(tried)} starts (tip error RMS "
+            f"best of {len(tried)} fits (tip error RMS "
             + ", ".join(f"{label} {fit.rmse_mm:.3f} mm" for label, fit in tried.items())
-            + "; stiff and soft: the transmissions' torsional rigidity 10x and 0.5x nominal)"
+            + (
+                "; stiff and soft: the transmissions' torsional rigidity 10x and 0.5x nominal"
+                if "stiff" in tried
+                else ""
+            )
+            + ")"
         )
     if res.at_bounds:
         warn(f"at a bound: {', '.join(res.at_bounds)}")

@@ -134,4 +134,4 @@ def test_calibrate_fits_torsion_from_stiff_and_soft_transmissions_too(tmp_path):
     axes = 3 if case.view == "3d" else 2
     assert doc["rmse_mm"] <= 1.3 * case.noise_mm * np.sqrt(axes), why
     assert starts["nominal"] > 3 * doc["rmse_mm"], why  # the set shows what the starts are for
-    assert "best of 3 starts" in result.output
+    assert "best of 3 fits" in result.output
