@@ -883,8 +883,8 @@ def calibrate_from_starts(
     lies on is chance. 'stiff': :func:`stiff_start`; 'soft': the nominal design with
     SOFT_START. Magnet on the robot's axis, torsion data drawn from the design space
     (``optimize.fitting.planted``, 15 sets): from the nominal design alone 5 fits ended at
-    1.7-15 times the noise's RMS, from these three starts 3 at 1.7-9 times (one of them
-    data along a path, which only a fit that follows it can match; the diagnosis does).
+    1.7-15 times the noise's RMS, from these three starts (and along the path, below) 2 at
+    1.7 and 9 times.
     Where the data have a sequence and driving their path ends in other states than the
     fit's solve at the best estimate (:func:`path_matters`), the best is also fitted along
     the path ('along the path'; on-axis torsion set [99, 9], 15 rows: 1.7 -> 0.9x the
