@@ -455,11 +455,9 @@ class _Problem:
             if self.warm and not cold and self.states is not None:
                 pred = self._warm_prediction(p)
             self._warm_cached = pred is not None
-            if pred is None and self._ramp is not None and self._ramp[0] == key:
-                solved = self._ramp[1]
+            if pred is None:
+                solved = self._ramp_solve(u)
             else:
-                if pred is None:
-                    pred = predict(self.model, p, self.m, self.ordered)
                 solved = (*prediction_sensitivities(self.model, p, pred), pred)
                 self.evaluations += 1
             self._key, self._cache = key, solved
@@ -531,14 +529,19 @@ class _Problem:
     def ramp_cost(self, u: np.ndarray) -> float:
         """The weighted sum of squares at u with every row by :func:`predict` (the one
         definition of the state), outside the cache and the warm starts. [-]"""
+        r = self._residual_vector(u, self._ramp_solve(u)[0])
+        return float(r @ r)
+
+    def _ramp_solve(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, Prediction]:
+        """Tip poses, their derivatives and the prediction at u by :func:`predict`, kept
+        for the last u asked (:meth:`ramp_cost`, then :meth:`settle`, see the same u)."""
         key = np.asarray(u, float).tobytes()
         if self._ramp is None or self._ramp[0] != key:
             p = self.params(u)
             pred = predict(self.model, p, self.m, self.ordered)
             self._ramp = key, (*prediction_sensitivities(self.model, p, pred), pred)
             self.evaluations += 1
-        r = self._residual_vector(u, self._ramp[1][0])
-        return float(r @ r)
+        return self._ramp[1]
 
     def _residual_vector(self, u: np.ndarray, out: np.ndarray) -> np.ndarray:
         r_pos = (out[:, :3] - self.m.position) / self.sigma[:, None]
