@@ -384,7 +384,7 @@ class _Problem:
         self.idx = [index(n) for n in names]
         fit = np.zeros(len(m), bool)
         fit[rows] = True
-        self.fit = fit
+        self.fit = fit & m.seen  # rows not seen only carry the path
         self.pos_mask = m.measured & fit[:, None]
         self.ang_mask = (
             np.isfinite(m.tip_angles) & fit[:, None] if tip_angles else np.zeros((len(m), 2), bool)
@@ -681,6 +681,7 @@ def calibrate(
             f"{prob.n_data()} measured coordinates cannot determine {len(names)} parameters"
         )
     dof = max(prob.n_data() - len(names), 1)
+    fit_rows = np.flatnonzero(prob.fit)
     if min_solved > 0:
         solved = prob.evaluate(u0)[2].equilibria.converged[fit_rows]
         if solved.mean() < min_solved:
@@ -1058,7 +1059,7 @@ def cross_validate(
         e = e_f[held]
         e = e[np.isfinite(e)]
         fold_rmse[f] = np.sqrt(np.mean(e**2)) / MM if e.size else np.nan
-    ok = np.isfinite(errors)
+    ok = np.isfinite(errors)  # (rows not seen have no error)
     expected = math.nan
     if full is not None and full.jacobian is not None and full.jacobian_rows is not None:
         rows = full.jacobian_rows
@@ -1069,6 +1070,6 @@ def cross_validate(
         fold_rmse_mm=fold_rmse,
         errors=errors,
         folds=folds,
-        unconverged=int(np.count_nonzero(~ok)),
+        unconverged=int(np.count_nonzero(m.seen & ~ok)),
         expected_ratio=expected,
     )

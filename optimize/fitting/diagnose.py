@@ -214,13 +214,13 @@ def _fit(
             if scanned.unconverged == 0 and scanned.chi2 < cal.chi2:
                 cal, path = scanned, "driven"
     solved = np.isfinite(cal.errors)
-    unsolved = int(np.count_nonzero(~solved))
+    unsolved = int(np.count_nonzero(m.seen & ~solved))
     coordinates = int(m.measured.sum())
     # Rows without a state cost what the fit's objective charged them: the straight robot's
     # miss. An infinite misfit would make every model that solves them win by -inf BIC,
     # whatever it does on the others.
     rss = float(np.nansum(cal.residuals[solved] ** 2))
-    rss += float(np.sum(straight_miss(cal.params, m)[~solved] ** 2))
+    rss += float(np.sum(straight_miss(cal.params, m)[m.seen & ~solved] ** 2))
     result = Fit(effects, cal, math.nan, rss, coordinates, path, unsolved)
     return _cross_validated(design, m, result, k=k, seed=seed, sigma=sigma) if cv else result
 

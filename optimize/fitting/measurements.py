@@ -2,7 +2,10 @@
 
 A measurement is one commanded pair of ring angles with the tip position seen by the
 tracker (any of x, y, z; a top view gives x and y only), optionally the ring angles seen
-at the tip, the acquisition order and a one-sigma position uncertainty. Files speak
+at the tip, the acquisition order and a one-sigma position uncertainty. With the order, a
+row may have no position: a configuration the bench drove but did not see (the tracker
+lost the tip, or the robot touched the external magnet), which still belongs to the path
+the robot was driven along. Files speak
 millimetres and degrees; :class:`Measurements` holds SI (m, rad). Every problem with a
 file raises :class:`MeasurementError`, whose one message names the file, the line and the
 column, what was expected and what was found.
@@ -50,7 +53,8 @@ class Measurements:
     """N measured configurations, SI units.
 
     command : shape (N, 2), commanded ring angles (theta1 distal, theta2 proximal). [rad]
-    position : shape (N, 3), measured tip position, base frame; NaN where not measured. [m]
+    position : shape (N, 3), measured tip position, base frame; NaN where not measured
+        (all three: a configuration driven but not seen, :attr:`seen`). [m]
     tip_angles : shape (N, 2), measured ring angles at the tip; NaN where not measured. [rad]
     sequence : shape (N,) int, acquisition order, or None when the data do not say.
     sigma : shape (N,), one-sigma position uncertainty of each row; NaN where not given. [m]
@@ -89,6 +93,12 @@ class Measurements:
     def measured(self) -> np.ndarray:
         """shape (N, 3) bool: which position components were measured."""
         return np.isfinite(self.position)
+
+    @property
+    def seen(self) -> np.ndarray:
+        """shape (N,) bool: rows with a measured position; the others are configurations
+        the bench drove along its path but did not see (only with a ``sequence``)."""
+        return self.measured.any(axis=1)
 
     def order(self) -> np.ndarray:
         """Row indices in acquisition order (by ``sequence``; file order without it)."""
@@ -210,13 +220,19 @@ def loads_measurements(text: str, source: str = "<string>") -> Measurements:
                 sequence[k] = _integer(where, name, cell)
             else:
                 values[name][k] = _number(where, name, cell, required=name in REQUIRED)
-        if not any(np.isfinite(values[c][k]) for c in POSITION):
+        if sequence is None and not any(np.isfinite(values[c][k]) for c in POSITION):
             given = [c for c in POSITION if c in col]
             raise MeasurementError(
                 f"{where}: no tip position; expected a number in at least one of "
-                f"{', '.join(given)}; found all empty"
+                f"{', '.join(given)}; found all empty (a configuration driven but not seen "
+                "belongs in a file with a 'sequence' column, which places it on the path)"
             )
     _check_duplicates(source, lines, values, sequence)
+    if not np.isfinite(np.column_stack([values[c] for c in POSITION])).any():
+        raise MeasurementError(
+            f"{source}: no row has a tip position; expected a number in at least one of "
+            f"{', '.join(c for c in POSITION if c in col)} in some row"
+        )
     return Measurements(
         command=np.column_stack([values["theta1_deg"], values["theta2_deg"]]) * DEG,
         position=np.column_stack([values[c] for c in POSITION]) * MM,

@@ -115,12 +115,14 @@ class Planted:
     def describe(self) -> str:
         """One line: what was planted, how it was measured, its margins."""
         d = self.design
+        lost = int(np.sum(~self.measurements.seen))
         margins = ", ".join(f"{k} {v:.2g}" for k, v in sorted(self.margin.items()))
         return (
             f"{self.name}: L {d.robot.free_length / MM:.0f} mm, "
             + ("magnet on axis, " if self.on_axis else "")
-            + f"{len(self.measurements)} rows, "
-            f"{self.view}, {'sequence' if self.ordered else 'no sequence'}, noise "
+            + f"{len(self.measurements)} rows"
+            + (f" ({lost} not seen), " if lost else ", ")
+            + f"{self.view}, {'sequence' if self.ordered else 'no sequence'}, noise "
             f"{self.noise_mm:.2f} mm" + (f", margin {margins}" if margins else "")
         )
 
@@ -213,7 +215,7 @@ def draw_planted(
             record_sigma=stated,
             ordered=ordered,
         )
-        if len(synthetic.measurements) < MIN_ROWS:
+        if synthetic.measurements.seen.sum() < MIN_ROWS:
             continue
         case = Planted(
             design, planted, truth, synthetic, noise, view, ordered, stated, {}, attempt, on_axis

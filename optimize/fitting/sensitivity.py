@@ -241,7 +241,7 @@ def prediction_sensitivities(
 
 def position_errors(position: np.ndarray, m: Measurements) -> np.ndarray:
     """Distance between model and measured tip over the measured coordinates, per row;
-    NaN where the model has no equilibrium. shape (N,) [m]"""
+    NaN where the model has no equilibrium or the row was not seen. shape (N,) [m]"""
     diff = np.where(m.measured, position - m.position, 0.0)
     dist = np.sqrt(np.sum(diff**2, axis=1))
-    return np.where(np.isfinite(position).all(axis=1), dist, np.nan)
+    return np.where(np.isfinite(position).all(axis=1) & m.seen, dist, np.nan)

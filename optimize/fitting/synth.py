@@ -5,7 +5,10 @@ that twists, friction in the transmissions) under a model with the chosen effect
 robot is driven along the commands in order (:func:`design.equilibrium.solve_sequence`),
 as on a bench, so hysteresis and snap-through appear as they would; each row records its
 place in that order (``sequence``). Configurations whose equilibrium does not converge
-or is unstable are dropped and counted. SI units are used for all inputs and outputs.
+or is unstable (the robot pulled onto the magnet, lost) are counted; along a path they
+stay as rows without a position (driven but not seen: the robot went through them, and
+what comes after depends on it), without one they are dropped. SI units are used for
+all inputs and outputs.
 """
 
 from __future__ import annotations
@@ -57,11 +60,12 @@ def default_commands(n: int = DEFAULT_N, both_ways: bool = True) -> np.ndarray:
 class Synthetic:
     """A synthetic data set and how it was made.
 
-    measurements : the noisy data (dropped configurations removed).
+    measurements : the noisy data (lost configurations: without a position along a
+        path, removed without one).
     params : shape (n,), the true model parameter vector (design + overrides). [SI]
     model : the model that produced the data.
     equilibria : the noise-free simulation of every commanded configuration, in order.
-    dropped : number of configurations dropped (unconverged or unstable).
+    dropped : number of configurations lost (unconverged or unstable): not seen.
     snapped : number of kept configurations reached by a snap-through.
     noise_free : the measurements without their noise (the same rows and coordinates).
     """
@@ -182,13 +186,13 @@ def synthesize_data(
     rng = np.random.default_rng(seed)
     noise = rng.normal(0.0, noise_mm * 1e-3, size=(len(cmd), 3))
     angle_noise = rng.normal(0.0, np.deg2rad(angle_noise_deg), size=(len(cmd), 2))
-    exact = eq.position.copy()
+    exact = np.where(keep[:, None], eq.position, np.nan)
     if view == "top":
         exact[:, 2] = np.nan
     position = exact + noise
     angles = eq.tip_angles + angle_noise if tip_angles else None
     sigma = np.full(len(cmd), noise_mm * 1e-3) if record_sigma and noise_mm > 0 else None
-    rows = np.flatnonzero(keep)
+    rows = np.arange(len(cmd)) if ordered else np.flatnonzero(keep)
     source = f"synthetic ({model.name} model, {view} view, noise {noise_mm:g} mm, seed {seed})"
 
     def measurements(position: np.ndarray, angles: np.ndarray | None) -> Measurements:

@@ -147,7 +147,8 @@ def synth(
     Drives the rings along a bench path with the chosen model effects (and any --set
     truths), adds Gaussian noise and writes design.toml (nominal) and measurements.csv
     (with a sequence column: the acquisition order). Configurations without a stable
-    equilibrium are dropped and counted.
+    equilibrium (the robot lost, e.g. pulled onto the magnet) are counted and written
+    without a position: driven, not seen.
     """
     from optimize.fitting.measurements import save_dataset
     from optimize.fitting.synth import synthesize_data
@@ -182,7 +183,7 @@ def synth(
             tip_angles=tip_angles,
         )
     m = data.measurements
-    if len(m) == 0:
+    if not m.seen.any():
         raise UserError(
             "no configuration has a stable equilibrium with these settings; nothing written"
         )
@@ -193,12 +194,12 @@ def synth(
     )
     save_dataset(out, d, m, comment=provenance)
     rest = rest_position(d.robot.free_length)
-    deflection = np.linalg.norm(np.nan_to_num(m.position - rest), axis=1) / MM
+    deflection = np.linalg.norm(np.nan_to_num(m.position - rest), axis=1)[m.seen] / MM
     table = Table(title=f"synthetic data set of '{d.name}' ({data.model.name} model)")
     table.add_column("item")
     table.add_column("value", justify="right")
     table.add_row("configurations written", str(len(m)))
-    table.add_row("dropped (no stable equilibrium)", str(data.dropped))
+    table.add_row("not seen (no stable equilibrium)", str(data.dropped))
     table.add_row("reached by a snap-through", str(data.snapped))
     table.add_row("view", "x, y (top)" if view == "top" else "x, y, z")
     table.add_row("noise (one sigma, each coordinate)", f"{noise_mm:g} mm, seed {seed}")
@@ -208,5 +209,8 @@ def synth(
         table.add_row(f"true {k}", f"{v / size:g} {unit if unit != '-' else ''}".rstrip())
     console.print(table)
     if data.dropped:
-        warn(f"{data.dropped} configuration(s) without a stable equilibrium were dropped")
+        warn(
+            f"{data.dropped} configuration(s) without a stable equilibrium (the robot lost): "
+            "written without a position, as driven but not seen"
+        )
     console.print(f"wrote {out}/: design.toml, measurements.csv")
