@@ -12,6 +12,8 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+import numpy as np
+
 from design.atomic import write_text
 from optimize.fitting.diagnose import Diagnosis, parameter_values
 from optimize.fitting.measurements import Measurements
@@ -89,13 +91,16 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
     )
     power = f"<h2>Power of the data</h2><ul>{power}</ul>" if power else ""
     left = f"<p><b>Not explained:</b> {html.escape(d.unexplained)}</p>" if d.unexplained else ""
+    lost = int(np.count_nonzero(~m.seen))
+    unseen = f" ({lost} more driven along the path but not seen)" if lost else ""
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>ringpair diagnosis</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 10px;text-align:right}}
 th{{background:#eee}}img{{max-width:100%}}</style></head><body>
 <h1>Diagnosis of {html.escape(m.source)}</h1>
-<p>{len(m)} measured configurations. Cross-validated error ratio final / baseline:
+<p>{int(m.seen.sum())} measured configurations{unseen}.
+Cross-validated error ratio final / baseline:
 <b>{number(doc["gain"]["cv_rmse_ratio"])}</b>.</p>
 <h2>Causes</h2><ul>{causes}</ul>{left}
 <h2>Every model tried</h2>{tried}

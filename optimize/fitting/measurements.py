@@ -100,6 +100,13 @@ class Measurements:
         the bench drove along its path but did not see (only with a ``sequence``)."""
         return self.measured.any(axis=1)
 
+    def rows_text(self) -> str:
+        """How many rows, and how many of them were not seen: '51 rows (23 not seen)'."""
+        lost = int(np.count_nonzero(~self.seen))
+        return f"{len(self):,} row{'s' * (len(self) != 1)}" + (
+            f" ({lost} not seen)" if lost else ""
+        )
+
     def order(self) -> np.ndarray:
         """Row indices in acquisition order (by ``sequence``; file order without it)."""
         if self.sequence is None:

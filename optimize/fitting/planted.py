@@ -115,15 +115,13 @@ class Planted:
     def describe(self) -> str:
         """One line: what was planted, how it was measured, its margins."""
         d = self.design
-        lost = int(np.sum(~self.measurements.seen))
         margins = ", ".join(f"{k} {v:.2g}" for k, v in sorted(self.margin.items()))
         return (
             f"{self.name}: L {d.robot.free_length / MM:.0f} mm, "
             + ("magnet on axis, " if self.on_axis else "")
-            + f"{len(self.measurements)} rows"
-            + (f" ({lost} not seen), " if lost else ", ")
-            + f"{self.view}, {'sequence' if self.ordered else 'no sequence'}, noise "
-            f"{self.noise_mm:.2f} mm" + (f", margin {margins}" if margins else "")
+            + f"{self.measurements.rows_text()}, {self.view}, "
+            f"{'sequence' if self.ordered else 'no sequence'}, noise {self.noise_mm:.2f} mm"
+            + (f", margin {margins}" if margins else "")
         )
 
 

@@ -91,7 +91,7 @@ def calibrate(
     freed = names or default_free(model.effects)
     if coordinates(m) < len(freed) and not priors:
         raise UserError(
-            f"{m.source}: {coordinates(m)} measured number(s) in {len(m)} row(s) cannot "
+            f"{m.source}: {coordinates(m)} measured number(s) in {m.rows_text()} cannot "
             f"determine {len(freed)} parameters ({', '.join(freed)}); measure more "
             "configurations" + (" or free fewer" if free is not None else "")
         )
@@ -105,7 +105,7 @@ def calibrate(
     if profile:
         with progress("profile likelihood"):
             intervals = profile_intervals(d, m, res, res.names)
-    table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {len(m)} rows")
+    table = Table(title=f"calibration of '{d.name}' ({model.name} model) on {m.rows_text()}")
     columns = ["parameter", "nominal", "estimate", "std. error"]
     for col in columns + (["1-sigma profile interval"] if profile else []) + ["unit"]:
         table.add_column(col, justify="right")

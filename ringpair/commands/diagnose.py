@@ -139,7 +139,7 @@ def diagnose(
     missed = misses(d, m, result.final.calibration)
     later = fit_warnings(d, m, result.final.calibration)
     doc = {**result.to_json(), "warnings": notes + later}
-    table = Table(title=f"diagnosis of {m.source} ({len(m)} rows, {result.time_s:.1f} s)")
+    table = Table(title=f"diagnosis of {m.source} ({m.rows_text()}, {result.time_s:.1f} s)")
     for col in ("model", "RMSE (mm)", "max (mm)", "cross-validated RMSE (mm)"):
         table.add_column(col, justify="right")
     fits = [("baseline", result.baseline)]
@@ -203,13 +203,13 @@ def _check_size(m: Measurements, folds: int, *, typed: bool, seed: int) -> None:
 
     if folds < 2:
         raise UserError(f"--folds must be at least 2; got {folds}")
-    configurations = len(np.unique(np.round(m.command, 12), axis=0))
+    configurations = len(np.unique(np.round(m.command[m.seen], 12), axis=0))
     if configurations < folds:
         raise UserError(
             f"--folds {folds} needs at least {folds} distinct configurations; {m.source} has "
             f"{configurations}"
             if typed
-            else f"{m.source}: {len(m)} row(s) with {configurations} distinct "
+            else f"{m.source}: {m.rows_text()} with {configurations} distinct seen "
             f"configuration(s) are too few to diagnose: the cross-validation needs at least "
             f"{folds}"
         )
