@@ -334,7 +334,7 @@ def test_calibrate_on_one_row_names_the_file_and_the_parameters(tmp_path, run, b
     one = _csv(tmp_path, "one.csv", bench[1][:2])
     result = run("calibrate", str(one))
     assert result.exit_code == 2
-    assert "one.csv: 3 measured number(s) in 1 row(s) cannot determine 4 parameters" in (
+    assert "one.csv: 3 measured number(s) in 1 row cannot determine 4 parameters" in (
         result.output
     )
     assert "bending_rigidity_scale" in result.output and "--free" not in result.output
