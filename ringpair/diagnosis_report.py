@@ -10,6 +10,7 @@ Figures (PNG, also embedded in ``diagnosis.html``):
 from __future__ import annotations
 
 import html
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from optimize.fitting.diagnose import Diagnosis, parameter_values
 from optimize.fitting.measurements import Measurements
 from ringpair.html_page import img, table
 from ringpair.plots import plot_positions, plot_residuals
+from ringpair.tables import estimate_text
 
 
 def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
@@ -49,7 +51,10 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
 
     params = table(
         ["parameter", "estimate", "standard error", "1-sigma profile interval"],
-        [[k, f"{v:.5g}", f"{error[k]:.2g}", interval(k)] for k, v in estimate.items()],
+        [
+            [k, estimate_text(v, error[k]), f"{error[k]:.2g}", interval(k)]
+            for k, v in estimate.items()
+        ],
     )
     causes = (
         "".join(f"<li>{html.escape(c.evidence)}</li>" for c in d.causes)
@@ -79,7 +84,10 @@ def write_report(d: Diagnosis, m: Measurements, out: Path) -> list[Path]:
                 number(c["cv_rmse_mm"]),
                 number(c["bic"], ".1f"),
                 number(c["bic_change"], "+.1f"),
-                ", ".join(f"{k} {v:.4g}" for k, v in c["params"].items()),
+                ", ".join(
+                    f"{k} {estimate_text(v, c['uncertainty'].get(k) or math.nan)}"
+                    for k, v in c["params"].items()
+                ),
                 c["verdict"],
             ]
             for name, c in doc["candidates"].items()

@@ -27,6 +27,7 @@ from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E40
 
 if TYPE_CHECKING:
     from optimize.fitting.diagnose import Diagnosis
+    from optimize.fitting.diagnosis import Fit
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.nlp import OptimizationResult
     from optimize.sizing.pareto import ParetoPoint, ParetoResult
@@ -442,6 +443,15 @@ def _acquisition_rank(m: Measurements) -> np.ndarray:
     return rank
 
 
+def compared_fits(d: Diagnosis) -> list[tuple[Fit, str, str]]:
+    """The fits a diagnosis' plots show, with colour and legend label: the baseline and
+    the final model; once where the final model is the baseline."""
+    if d.final.calibration is d.baseline.calibration:
+        return [(d.final, "tab:blue", "baseline (final)")]
+    name = "baseline, refitted" if d.final.name == "baseline" else d.final.name
+    return [(d.baseline, "tab:red", "baseline"), (d.final, "tab:blue", f"{name} (final)")]
+
+
 def plot_residuals(d: Diagnosis, m: Measurements, path: Path) -> None:
     """Error per row [mm] against order, theta1 and theta1 - theta2, baseline vs final."""
     t1 = np.rad2deg(m.command[:, 0])
@@ -453,10 +463,7 @@ def plot_residuals(d: Diagnosis, m: Measurements, path: Path) -> None:
         ("acquisition order", "theta1 commanded [deg]", "theta1 - theta2 [deg]"),
         strict=True,
     ):
-        for fit, colour, name in (
-            (d.baseline, "tab:red", "baseline"),
-            (d.final, "tab:blue", d.final.name),
-        ):
+        for fit, colour, name in compared_fits(d):
             ax.plot(x, fit.calibration.errors / MM, "o", ms=3.5, color=colour, label=name)
         ax.set_xlabel(label)
         ax.grid(alpha=0.3)
@@ -474,10 +481,7 @@ def plot_positions(d: Diagnosis, m: Measurements, path: Path) -> None:
     meas = m.position / MM
     has_z = np.isfinite(meas[:, 2]).mean() > 0.5
     order = _acquisition_rank(m)
-    for fit, colour, name in (
-        (d.baseline, "tab:red", "baseline"),
-        (d.final, "tab:blue", d.final.name),
-    ):
+    for fit, colour, name in compared_fits(d):
         model = (m.position - fit.calibration.residuals) / MM
         if has_z:
             a, b = model[:, 1], model[:, 2]

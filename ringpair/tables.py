@@ -1,12 +1,13 @@
 """Tables of results and their CSV files: simulated tip poses (columns named as in
-docs/formats.md), the model effects compared, the Pareto points; and the study report's
-tables (every dimension with its bounds, results per material, what each limit costs, the
-CAD checks to show). File units (mm, deg, MPa)."""
+docs/formats.md), the model effects compared, the Pareto points, fitted estimates; and the
+study report's tables (every dimension with its bounds, results per material, what each
+limit costs, the CAD checks to show). File units (mm, deg, MPa)."""
 
 from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -113,6 +114,18 @@ def _cell(value: object) -> str:
     if isinstance(value, float | np.floating):
         return "" if not np.isfinite(value) else f"{float(value):.9g}"
     return str(value)
+
+
+def estimate_text(value: float, error: float) -> str:
+    """A fitted ``value`` written to the precision its one-sigma ``error`` gives it: one
+    digit past the error's first (a tip mass at its bound of 0 g with a 0.03 g error
+    shows 0.000, not the optimiser's 4.3e-10); 5 significant digits where the error is
+    zero, unknown or infinite. Same units for both."""
+    if not (math.isfinite(value) and math.isfinite(error) and error > 0):
+        return f"{value:.5g}"
+    decimals = max(0, 1 - math.floor(math.log10(error)))
+    text = f"{value:.{decimals}f}"
+    return text.lstrip("-") if float(text) == 0 else text
 
 
 def effect_shifts(

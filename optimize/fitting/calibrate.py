@@ -942,18 +942,24 @@ class CrossValidation:
 
 def configuration_folds(m: Measurements, k: int, seed: int | None = 0) -> np.ndarray:
     """Fold number of each row (shape (N,)): rows with the same commanded angles share a
-    fold, so a held-out configuration is never seen in training; folds are seeded."""
-    _, group = np.unique(np.round(m.command, 12), axis=0, return_inverse=True)
-    group = np.asarray(group).ravel()
-    n_groups = int(group.max()) + 1
+    fold, so a held-out configuration is never seen in training; folds are seeded. Only
+    seen configurations are dealt into folds: a configuration driven but never seen
+    carries no error to hold out and gets -1 (always in training, where it only keeps
+    the path)."""
+    seen = np.round(m.command[m.seen], 12)
+    configurations = np.unique(seen, axis=0)
+    n_groups = len(configurations)
     if not 2 <= k <= n_groups:
         raise ValueError(
-            f"k must be between 2 and the number of distinct configurations ({n_groups}); got {k}"
+            f"k must be between 2 and the number of distinct seen configurations ({n_groups}); "
+            f"got {k}"
         )
     perm = np.random.default_rng(seed).permutation(n_groups)
     fold_of_group = np.empty(n_groups, int)
     fold_of_group[perm] = np.arange(n_groups) % k
-    return fold_of_group[group]
+    commands = np.round(m.command, 12)
+    match = (commands[:, None, :] == configurations[None, :, :]).all(axis=2)
+    return np.where(match.any(axis=1), fold_of_group[match.argmax(axis=1)], -1)
 
 
 def held_out_inflation(jacobian: np.ndarray, fold: np.ndarray, position: np.ndarray) -> float:
@@ -977,7 +983,7 @@ def held_out_inflation(jacobian: np.ndarray, fold: np.ndarray, position: np.ndar
     j = np.asarray(jacobian, float)
     hat = j @ np.linalg.pinv(j.T @ j, rcond=1e-10, hermitian=True) @ j.T
     held = 0.0
-    for f in np.unique(fold):
+    for f in np.unique(fold[fold >= 0]):
         i = np.flatnonzero(fold == f)
         block = np.linalg.pinv(np.eye(i.size) - hat[np.ix_(i, i)], rcond=1e-12)
         held += float(np.trace(block[np.ix_(position[i], position[i])]))

@@ -105,6 +105,7 @@ class Candidate:
             "cv_rmse_mm": f.cv_rmse_mm if f else math.nan,
             "cv_expected_ratio": f.cv_expected_ratio if f else math.nan,
             "params": parameter_values(f.calibration) if f else {},
+            "uncertainty": parameter_values(f.calibration, standard_error=True) if f else {},
             "unsolved_rows": f.unsolved if f else None,
             "verdict": self.verdict,
         }

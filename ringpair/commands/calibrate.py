@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import click
 import numpy as np
@@ -28,6 +29,7 @@ from ringpair.options import (
     progress,
     warn,
 )
+from ringpair.tables import estimate_text
 
 
 @click.command()
@@ -113,7 +115,7 @@ def calibrate(
         cells = [
             str(row["name"]),
             f"{row['nominal']:.5g}",
-            f"{row['estimate']:.5g}",
+            estimate_text(cast(float, row["estimate"]), cast(float, row["standard_error"])),
             f"{row['standard_error']:.2g}",
         ]
         if profile:

@@ -4,6 +4,7 @@ and cross-validation."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -235,6 +236,26 @@ def test_cross_validation_holds_out_whole_configurations(demonstrator):
     fit = calibrate(demonstrator, m)
     assert cv.unconverged == 0 and np.isfinite(cv.fold_rmse_mm).all()
     assert fit.rmse_mm < cv.rmse_mm < 1.5 * fit.rmse_mm
+
+
+def test_folds_deal_only_configurations_seen(demonstrator):
+    """A configuration driven but never seen (x, y, z empty, docs/formats.md) has no error
+    to hold out: it is in every training set (fold -1) and never makes a fold of its own;
+    the seen ones are dealt as if it were absent."""
+    m = synthesize(demonstrator, noise_mm=0.3, seed=8)
+    configurations, group = np.unique(m.command, axis=0, return_inverse=True)
+    lost = np.isin(np.asarray(group).ravel(), np.arange(0, len(configurations), 3))
+    position = m.position.copy()
+    position[lost] = np.nan
+    partly = dataclasses.replace(m, position=position)
+    folds = configuration_folds(partly, 5, seed=1)
+    assert (folds[lost] == -1).all()
+    assert sorted(set(folds[~lost])) == list(range(5))
+    seen_only = configuration_folds(partly.subset(~lost), 5, seed=1)
+    np.testing.assert_array_equal(folds[~lost], seen_only)
+    n_seen = len(np.unique(m.command[~lost], axis=0))
+    with pytest.raises(ValueError, match=f"distinct seen configurations \\({n_seen}\\)"):
+        configuration_folds(partly, n_seen + 1)
 
 
 def test_bad_free_parameters_are_named(demonstrator):

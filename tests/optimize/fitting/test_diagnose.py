@@ -22,6 +22,7 @@ from optimize.fitting.diagnose import diagnose, report_key, residual_structure
 from optimize.fitting.likelihood import profile_sigma
 from optimize.fitting.planted import draw_planted
 from optimize.fitting.synth import SETUPS, setup_variant, synthesize_data
+from ringpair.plots import compared_fits
 
 DEMO = default_design()
 
@@ -138,6 +139,8 @@ def test_diagnosis_names_the_planted_effect_and_recovers_its_parameters(planted,
     assert excess(result.final) < 0.5 * excess(result.baseline), why
     assert result.final.calibration.rmse_mm < 1.5 * noise * np.sqrt(axes), why
     assert all(c.evidence.startswith(c.name) for c in result.causes)
+    labels = [label for _, _, label in compared_fits(result)]
+    assert labels == ["baseline", f"{result.final.name} (final)"]
     doc = result.to_json()
     assert doc["gain"]["cv_rmse_ratio"] == pytest.approx(
         result.final.cv_rmse_mm / result.baseline.cv_rmse_mm
@@ -152,6 +155,7 @@ def test_baseline_data_name_no_cause(setup):
     assert result.causes == (), f"{why}: {result.to_json()['causes']}"
     assert result.to_json()["causes"] == []
     assert result.final is result.baseline
+    assert [label for _, _, label in compared_fits(result)] == ["baseline (final)"]
 
 
 def test_residual_structure_finds_a_pattern_and_not_noise():

@@ -35,7 +35,8 @@ def test_diagnose_writes_the_spec_json_and_report(tmp_path, run):
     tried = doc["candidates"]
     assert tried["gravity"]["verdict"].startswith("accepted: BIC")
     assert all(c["verdict"] for c in tried.values())
-    assert {"rmse_mm", "cv_rmse_mm", "bic", "params"} <= set(tried["gravity"])
+    assert {"rmse_mm", "cv_rmse_mm", "bic", "params", "uncertainty"} <= set(tried["gravity"])
+    assert set(tried["gravity"]["uncertainty"]) == set(tried["gravity"]["params"])
     assert "every model tried" in result.output
     assert set(doc["power"]) <= {"torsion", "hysteresis", "near_field", "large_deflection"}
     page = (tmp_path / "r" / "diagnosis.html").read_text()
