@@ -32,7 +32,7 @@ from optimize.fitting.diagnose import (
     screen_starts,
 )
 from optimize.fitting.measurements import load_dataset, save_dataset
-from optimize.fitting.planted import PLANTABLE, PLANTED_SETS, draw_planted
+from optimize.fitting.planted import PLANTABLE, PLANTED_SETS, Planted, draw_planted
 from optimize.fitting.workers import parallel_map
 
 SEED = 15
@@ -50,6 +50,21 @@ ON_AXIS_NUMBER = 10
 CASES += [(p, ON_AXIS_NUMBER) for p in ON_AXIS]
 
 
+def drawn(planted: frozenset[str], first: int, number: int, **options) -> tuple[Planted, str]:
+    """The benchmark's set of ``planted`` drawn from the seed [first, its index in
+    PLANTED_SETS, number] (``options``: :func:`draw_planted`'s), and a line naming it for
+    failure messages."""
+    seed = [first, PLANTED_SETS.index(planted), number]
+    case = draw_planted(np.random.default_rng(seed), planted, **options)
+    return case, f"seed {seed}: {case.describe()}"
+
+
+FIT = {"k": 5, "seed": 0, "cv": False, "sigma": None}
+"""The fits' options in these tests (:func:`_fit`): folds as the diagnosis', no CV."""
+SCREEN = {**FIT, "max_nfev": SCREEN_EVALUATIONS}
+"""... and a screen's budget."""
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("planted", "number"),
@@ -60,11 +75,7 @@ CASES += [(p, ON_AXIS_NUMBER) for p in ON_AXIS]
     ],
 )
 def test_the_planted_effects_are_named_and_nothing_else(planted, number, tmp_path):
-    seed = [SEED, PLANTED_SETS.index(planted), number]
-    case = draw_planted(
-        np.random.default_rng(seed), planted, points=POINTS, on_axis=number >= ON_AXIS_NUMBER
-    )
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, SEED, number, points=POINTS, on_axis=number >= ON_AXIS_NUMBER)
     assert case.detectable, f"not detectable after {case.tries} draws: {why}"
     design, m = load_dataset(save_dataset(tmp_path / "set", case.design, case.measurements))
     result = diagnose(design, m, seed=number)
@@ -86,13 +97,9 @@ def test_gravity_frees_the_field_strength_it_separates():
     remanence 10 % off; gravity's known rod weight separates it from the bending rigidity,
     and the diagnosis' refit with it free (``_refine``) brings the held-out error to the
     noise (CV RMSE 2.24x the noise with it fixed, benchmarks/diagnose.py)."""
-    seed = [2, PLANTED_SETS.index(frozenset({"gravity"})), 0]
-    case = draw_planted(np.random.default_rng(seed), frozenset({"gravity"}))
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(frozenset({"gravity"}), 2, 0)
     effects = frozenset({"gravity"})
-    fixed = _fit(
-        case.design, case.measurements, effects, k=5, seed=0, cv=True, starts=[None], sigma=None
-    )
+    fixed = _fit(case.design, case.measurements, effects, starts=[None], **{**FIT, "cv": True})
     tried: dict = {}
     refined = _refine(
         case.design, case.measurements, fixed, tried, k=5, seed=0, sigma=None, say=print
@@ -114,11 +121,10 @@ def test_every_passing_candidate_is_fitted_in_full_before_one_is_added():
     in full, near field wins on its full BIC and the final model reaches the planted
     model's CV (1.09x the noise; the goal 1.3x)."""
     planted = frozenset({"near_field", "torsion"})
-    seed = [2, PLANTED_SETS.index(planted), 0]
-    case = draw_planted(np.random.default_rng(seed), planted)
+    case, why = drawn(planted, 2, 0)
     result = diagnose(case.design, case.measurements, seed=0)
     verdicts = {k: c.verdict for k, c in result.candidates.items()}
-    why = f"seed {seed}: {case.describe()}; {verdicts}"
+    why += f"; {verdicts}"
     assert {c.name for c in result.causes} == set(planted), why
     assert verdicts["large_deflection+torsion"].startswith("rejected"), why
     assert "near_field+torsion fits better" in verdicts["large_deflection+torsion"], why
@@ -136,16 +142,13 @@ def test_a_screen_of_torsion_along_a_path_reaches_the_soft_transmissions_basin()
     reach the noise (the fit from the truth does: RSS 3.0e-6 m^2 on 114 coordinates of
     0.18 mm noise)."""
     planted = frozenset({"gravity", "torsion"})
-    seed = [5, PLANTED_SETS.index(planted), 0]
-    case = draw_planted(np.random.default_rng(seed), planted)
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, 5, 0)
     design, m = case.design, case.measurements
-    common = {"k": 5, "seed": 0, "cv": False, "sigma": None, "max_nfev": SCREEN_EVALUATIONS}
-    current = _fit(design, m, frozenset({"gravity"}), starts=[None], **common)
+    current = _fit(design, m, frozenset({"gravity"}), starts=[None], **SCREEN)
 
     def misfit(start):
         try:
-            fit = _fit(design, m, planted, starts=[start], free=default_free(planted), **common)
+            fit = _fit(design, m, planted, starts=[start], free=default_free(planted), **SCREEN)
         except UnsolvedStart:
             return math.inf
         return fit.rss if fit.unsolved == 0 else math.inf
@@ -165,15 +168,12 @@ def test_a_screen_of_the_near_field_starts_from_the_centre_that_fits_best():
     dipole-field baseline put it 4 mm off. Moved by the scan, the centre gives a start
     from which the screen passes (BIC -388 from the noise-level fit of the truth)."""
     planted = frozenset({"near_field"})
-    seed = [5, PLANTED_SETS.index(planted), 0]
-    case = draw_planted(np.random.default_rng(seed), planted)
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, 5, 0)
     design, m = case.design, case.measurements
-    common = {"k": 5, "seed": 0, "cv": False, "sigma": None}
-    baseline = _fit(design, m, frozenset(), starts=[None], **common)
+    baseline = _fit(design, m, frozenset(), starts=[None], **FIT)
     start = _centre_scan(design, m, baseline, planted, default_free(planted))
     assert start is not None, why
-    screen = _fit(design, m, planted, starts=[start], max_nfev=SCREEN_EVALUATIONS, **common)
+    screen = _fit(design, m, planted, starts=[start], **SCREEN)
     assert screen.bic() - baseline.bic() < -BIC_DROP, f"{why}; BIC {screen.bic() - baseline.bic()}"
 
 
@@ -187,14 +187,11 @@ def test_a_screen_of_the_near_field_also_scans_the_centre_about_the_nominal_desi
     noise). About the nominal design the centre moved 2 mm along z fits at 50 times the
     noise's misfit (0.166 -> 0.0002 m^2), and the screen from there reaches the noise."""
     planted = frozenset({"near_field"})
-    seed = [7, PLANTED_SETS.index(planted), 0]
-    case = draw_planted(np.random.default_rng(seed), planted)
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, 7, 0)
     design, m = case.design, case.measurements
     start = _centre_scan(design, m, None, planted, default_free(planted))
     assert start is not None, why
-    common = {"k": 5, "seed": 0, "cv": False, "sigma": None}
-    screen = _fit(design, m, planted, starts=[start], max_nfev=SCREEN_EVALUATIONS, **common)
+    screen = _fit(design, m, planted, starts=[start], **SCREEN)
     noise_rss = int(m.measured.sum()) * (case.noise_mm * 1e-3) ** 2
     assert screen.rss < 1.5 * noise_rss, f"{why}; RSS / noise's {screen.rss / noise_rss:.3g}"
 
@@ -208,15 +205,12 @@ def test_a_screen_from_where_the_rod_is_pulled_onto_the_magnet_also_starts_stiff
     torsion alone, CV 5.2 times the noise. From the rod twice as stiff (STIFFER) every row
     has a state, and the screen passes on top of torsion."""
     planted = frozenset({"large_deflection", "torsion"})
-    seed = [3, PLANTED_SETS.index(planted), 0]
-    case = draw_planted(np.random.default_rng(seed), planted)
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, 3, 0)
     design, m = case.design, case.measurements
     with pytest.raises(UnsolvedStart):
         calibrate(design, m, planted, max_nfev=SCREEN_EVALUATIONS, min_solved=MIN_SOLVED)
-    common = {"k": 5, "seed": 0, "cv": False, "sigma": None}
-    torsion = _fit(design, m, frozenset({"torsion"}), starts=[None], **common)
-    screen = _fit(design, m, planted, starts=[None], max_nfev=SCREEN_EVALUATIONS, **common)
+    torsion = _fit(design, m, frozenset({"torsion"}), starts=[None], **FIT)
+    screen = _fit(design, m, planted, starts=[None], **SCREEN)
     assert screen.unsolved == 0, why
     assert screen.bic() - torsion.bic() < -BIC_DROP, f"{why}; BIC {screen.bic() - torsion.bic()}"
 
@@ -231,15 +225,12 @@ def test_a_fit_that_leaves_a_row_pulled_onto_the_magnet_looks_nearby_for_its_sta
     0.5 mm (UNSOLVED_OFFSETS) gives that row its state; the fit from there must solve
     every row at the noise and pass."""
     planted = frozenset({"hysteresis", "near_field"})
-    seed = [3, PLANTED_SETS.index(planted), 1]
-    case = draw_planted(np.random.default_rng(seed), planted)
-    why = f"seed {seed}: {case.describe()}"
+    case, why = drawn(planted, 3, 1)
     design, m = case.design, case.measurements
-    common = {"k": 5, "seed": 0, "cv": False, "sigma": None, "max_nfev": SCREEN_EVALUATIONS}
-    friction = _fit(design, m, frozenset({"hysteresis"}), starts=[None], **common)
+    friction = _fit(design, m, frozenset({"hysteresis"}), starts=[None], **SCREEN)
     free = default_free(planted)
     truth = {n: v for n, v in case.truth.items() if n in free}
-    screen = _fit(design, m, planted, starts=[truth], free=free, **common)
+    screen = _fit(design, m, planted, starts=[truth], free=free, **SCREEN)
     assert screen.unsolved == 0, why
     noise_rms = case.noise_mm * math.sqrt(3)
     assert screen.calibration.rmse_mm < 1.2 * noise_rms, why
