@@ -347,9 +347,12 @@ def _prefix_start(
         own = calibrate(design, m.subset(early), effects, free, ordered="driven", sigma=sigma)
     except UnsolvedStart:
         return None
-    own_rms = np.sqrt(np.nanmean(own.errors**2))
-    whole_rms = np.sqrt(np.nanmean(fitted.errors[early & m.seen] ** 2))
-    return dict(own.estimate) if whole_rms > PREFIX_GAP * own_rms else None
+    mine = own.errors[np.isfinite(own.errors)]
+    if mine.size == 0:
+        return None
+    whole = fitted.errors[early & m.seen]  # a row without a state there: a miss too
+    whole_rms = math.sqrt(np.mean(whole**2)) if np.isfinite(whole).all() else math.inf
+    return dict(own.estimate) if whole_rms > PREFIX_GAP * math.sqrt(np.mean(mine**2)) else None
 
 
 def _cross_validated(
