@@ -329,7 +329,8 @@ def test_the_first_order_power_of_the_data_lies_within_its_band_of_the_refitted_
     # refit (a short fit of the baseline to each effect's predictions, the method before
     # it) on bench data drawn from the whole design space (optimize.fitting.planted); the
     # near field is always refitted (REFITTED_POWER): seed 8808 puts its first order 50x
-    # off, seed 8815 8x.
+    # off, seed 8815 8x. Where the refit meets a configuration the baseline cannot solve
+    # (seed 8806, large deflection), both must still give the same verdict.
     from optimize.fitting import diagnose as module
 
     band = module.FIRST_ORDER_BAND
@@ -348,6 +349,9 @@ def test_the_first_order_power_of_the_data_lies_within_its_band_of_the_refitted_
             continue
         if effect in module.REFITTED_POWER:
             assert margins[0] == margins[1], where
+            continue
+        if "method" not in margins[1]:  # the refit met a configuration without a state
+            assert margins[0]["could_tell_apart"] == margins[1]["could_tell_apart"], where
             continue
         assert [p["method"] for p in margins] == ["to first order", "refitted"], where
         if max(first, refit) < 1e-6:  # nothing to see either way (gravity across the view)
