@@ -32,11 +32,12 @@ the states (a multistable robot), and each full fit of such data also scans the 
 along the path around its estimate (:func:`_scan`): snap-throughs make it jump, which a
 local least-squares fit cannot see. Such a fit also starts from a fit of the path's first
 rows, where the whole path's fit misses them (:func:`_prefix_start`: before the robot
-has snapped much its states change smoothly), and a fit of friction play from the
-friction angles at a few levels where that fits the path better (FRICTION_LEVELS: stick
-or slip jumps with them). For the same reason a screen starts from several
-points (:func:`screen_starts`; torsion also from stiff and from soft transmissions, and
-from the other parameters fitted first with stiff transmissions, STIFF_FIRST), and
+has snapped much its states change smoothly), and a fit of friction play or torsion from a
+start without their parameters also from those at a few levels, where one fits better
+(LEVELS: stick or slip, and the rings' snaps, jump with them). For the same reason a
+screen starts from several points (:func:`screen_starts`; torsion also from stiff and
+from soft transmissions, and from the other parameters fitted first with stiff
+transmissions, STIFF_FIRST), and
 the near field also from the external magnet's centre moved a few millimetres, about the
 current estimates and about the nominal design, where that fits better
 (:func:`_centre_scan`: near a strong magnet the rows' branches change with where it is).
@@ -127,18 +128,33 @@ Benchmark seed [3, 9, 1] (friction and the near field, 28 rows seen along a path
 near-field candidate fitted the other rows at 1.07 times the noise's RMS but left one
 pulled onto the magnet, charged so much that the candidate was rejected (BIC +90); its
 estimate with the centre moved 0.5 mm along z solves every row. [m]"""
-FRICTION_LEVELS = {
-    n: tuple(f * FREE_PARAMETERS[n].prior * FREE_PARAMETERS[n].step for f in (0.5, 1.0, 2.0))
-    for n in EFFECT_FREE["hysteresis"]
+LEVELS = {
+    **{
+        n: tuple(f * FREE_PARAMETERS[n].prior * FREE_PARAMETERS[n].step for f in (0.5, 1.0, 2.0))
+        for n in EFFECT_FREE["hysteresis"]
+    },
+    **{n: tuple(2 ** (k / 2) for k in range(-2, 5)) for n in EFFECT_FREE["torsion"]},
 }
-"""Friction angles (of each transmission, and every pair of them) at which a fit of the
-friction play looks along the path for a better start than its own (see :func:`_scan`):
-half, one and two widths of their prior (2.5, 5 and 10 deg). Whether a ring sticks or
-slips on its way to a row jumps with the friction angle, so the misfit is a staircase in
-it that a local fit does not climb. Benchmark seed [3, 9, 0] (friction and the near
-field, 63 rows along a path near the magnet): from the near-field model's estimates with
-no friction, friction with the near field fitted at 11x the noise's RMS; with the
-catheter's friction at 5 deg the start is at 2x and the fit reaches the noise. [rad]"""
+"""Values of an effect's own parameters (of each transmission, and every pair of them) at
+which a fit of the effect looks for a better start than its own (see :func:`_scan`)
+where its start has none of them (a start with them is a fit, or was leveled).
+
+Friction angles [rad]: half, one and two widths of their prior (2.5, 5 and 10 deg).
+Whether a ring sticks or slips on its way to a row jumps with the friction angle, so the
+misfit is a staircase in it that a local fit does not climb. Benchmark seed [3, 9, 0]
+(friction and the near field, 63 rows along a path near the magnet): from the near-field
+model's estimates with no friction, friction with the near field fitted at 11x the
+noise's RMS; with the catheter's friction at 5 deg the start is at 2x and the fit
+reaches the noise.
+
+Torsion scales [-]: 0.5 to 4 times nominal in steps of sqrt(2). Where a ring's twist
+tips it over to another state depends on both transmissions' stiffness, and fits from
+nominal, stiff and soft transmissions can all end in a basin where one transmission is
+rigid. Gravity and torsion planted (tests/optimize/fitting/test_diagnose.py seed
+172425381: 63 rows along a path, wire 1.5 and catheter 2.8 times nominal): every start
+of the diagnosis ended at the catheter 22 times nominal, 4x the noise's RMS (the
+transmissions at (2, 4) as well); from the nominal design with them at (1.41, 4), the
+best of these levels, the fit reaches the noise."""
 PREFIX_SHARE = 0.2
 PREFIX_PER_PARAMETER = 3
 """A full fit of data with a path also fits the path's first rows in the order of
@@ -236,7 +252,7 @@ def _fit(
     for s in starts:
         values = {} if s is None else s if isinstance(s, Mapping) else s.estimate
         initial = {n: v for n, v in values.items() if n in free} or None
-        leveled = _friction_start(model, design, m, initial, free) if mode else None
+        leveled = _leveled_start(model, design, m, initial, free, mode, unset=values)
         # A fit of this model starts from its own states (the first evaluation warm).
         same = isinstance(s, CalibrationResult) and s.effects == model.effects and not leveled
         initial = leveled or initial
@@ -255,10 +271,7 @@ def _fit(
         if path_matters(model, cal.params, m, mode):
             cal, path = fit({n: cal.estimate[n] for n in free}, "driven")
         fits.append((cal, path))
-        start_params = model.parameters(design)
-        for n, v in (initial or {}).items():
-            start_params[index(n)] = v
-        if path_matters(model, start_params, m, mode):
+        if path_matters(model, _parameters(model, design, initial), m, mode):
             fits.append(fit(initial, "driven"))
     if not fits:
         raise skipped[0]
@@ -297,6 +310,16 @@ def _fit(
     return _cross_validated(design, m, result, k=k, seed=seed, sigma=sigma) if cv else result
 
 
+def _parameters(
+    model: RingPairModel, design: Design, values: Mapping[str, float] | None
+) -> np.ndarray:
+    """``model``'s parameter vector of ``design`` with ``values`` (by name) set. [SI]"""
+    params = model.parameters(design)
+    for name, value in (values or {}).items():
+        params[index(name)] = value
+    return params
+
+
 def _stiffer(
     model: RingPairModel, design: Design, initial: Mapping[str, float] | None, free: Sequence[str]
 ) -> list[dict[str, float]]:
@@ -305,23 +328,29 @@ def _stiffer(
     name = "bending_rigidity_scale"
     if name not in free:
         return []
-    value = (initial or {}).get(name, float(model.parameters(design)[index(name)]))
+    value = float(_parameters(model, design, initial)[index(name)])
     return [{**(initial or {}), name: value * f} for f in STIFFER]
 
 
-def _friction_start(
+def _leveled_start(
     model: RingPairModel,
     design: Design,
     m: Measurements,
     initial: Mapping[str, float] | None,
     free: Sequence[str],
+    mode: bool | Literal["driven"],
+    *,
+    unset: Iterable[str],
 ) -> dict[str, float] | None:
-    """A start of a fit of friction play along the path better than ``initial`` (None:
-    the nominal design) with the friction angles at FRICTION_LEVELS, or None. [SI]"""
-    params = model.parameters(design)
-    for name, value in (initial or {}).items():
-        params[index(name)] = value
-    return _scan(model, m, params, free, factors=(), levels=FRICTION_LEVELS)
+    """A start better than ``initial`` (None: the nominal design) with the free
+    parameters of LEVELS not in ``unset`` (a start's values) at their levels, or None;
+    solved along the bench's path where the data or ``mode`` have one. [SI]"""
+    levels = {n: v for n, v in LEVELS.items() if n in free and n not in set(unset)}
+    if not levels:
+        return None
+    params = _parameters(model, design, initial)
+    path: bool | Literal["driven"] = "driven" if m.sequence is not None or mode else False
+    return _scan(model, m, params, free, ordered=path, factors=(), levels=levels)
 
 
 def _prefix_start(
@@ -462,9 +491,7 @@ def _centre_scan(
     CENTRE_OFFSETS where that fits better (:func:`_scan`; along the bench's path where the
     data have one: near the magnet the states depend on it), or None."""
     model = model_for(effects)
-    params = model.parameters(design)
-    for name, value in around.calibration.estimate.items() if around is not None else ():
-        params[index(name)] = value
+    params = _parameters(model, design, around.calibration.estimate if around is not None else None)
     path: bool | Literal["driven"] = "driven" if m.sequence is not None else False
     return _scan(model, m, params, free, ordered=path, factors=(), offsets=CENTRE_OFFSETS)
 

@@ -202,6 +202,43 @@ def test_a_fit_along_the_path_leaves_the_basin_where_the_robot_does_not_snap():
         assert err < 4 * fit.calibration.standard_error[name], name
 
 
+def test_a_fit_of_torsion_from_nominal_also_starts_from_the_transmissions_levels():
+    """Regression (seed 172425381 of the torsion + gravity test, once failed: 63 rows along
+    a path, wire 1.5 and catheter 2.8 times nominal): every start of the diagnosis, from
+    nominal, stiff and soft transmissions, ended where the catheter is 22 times nominal,
+    4x the noise's RMS, and the final model stayed at 3x. A fit of torsion from a start
+    without it also starts from its transmissions at LEVELS
+    (:data:`optimize.fitting.diagnose.LEVELS`), and a screen from the nominal design must
+    reach the noise and the truth's transmissions."""
+    from optimize.fitting.calibrate import calibrate, default_free
+    from optimize.fitting.diagnose import SCREEN_EVALUATIONS, _fit
+
+    effects = frozenset({"torsion", "gravity"})
+    seed = 172425381
+    design, truth, noise = draw(tuple(effects), seed)
+    m = synthesize_data(
+        design, tuple(effects), noise_mm=noise, seed=seed, params_override=truth
+    ).measurements
+    limit = 1.5 * noise * np.sqrt(3)
+    stuck = calibrate(design, m, effects, default_free(effects), ordered="driven")
+    assert stuck.rmse_mm > 2 * limit  # the trap is there
+    fit = _fit(
+        design,
+        m,
+        effects,
+        k=5,
+        seed=0,
+        cv=False,
+        starts=[None],
+        sigma=None,
+        max_nfev=SCREEN_EVALUATIONS,
+    )
+    assert fit.calibration.rmse_mm < limit, fit.calibration.rmse_mm
+    for name in ("wire_torsion_scale", "catheter_torsion_scale"):
+        estimate = fit.calibration.estimate[name]
+        assert abs(estimate - truth[name]) < 0.2 * truth[name], (name, estimate, truth[name])
+
+
 def test_the_profile_likelihood_covers_torsion_where_the_linearised_error_does_not():
     """Regression (seed 2313850729 of the torsion test, once failed coverage): the magnet
     at the far end of the bench range makes the rod's compliance and the magnet's distance

@@ -245,7 +245,7 @@ def test_a_path_is_fitted_from_its_first_rows_and_friction_from_its_levels():
     top of it failed (BIC +70): the diagnosis named gravity and large deflection instead
     (CV 6.5x the noise). Fitted first on the path's first rows (PREFIX_SHARE), the near
     field reaches 2.3x; from there, with the catheter's friction at one of
-    FRICTION_LEVELS (a local fit cannot climb the staircase of stick and slip), friction
+    LEVELS (a local fit cannot climb the staircase of stick and slip), friction
     reaches the noise and pays."""
     planted = frozenset({"hysteresis", "near_field"})
     case, why = drawn(planted, 3, 0)
