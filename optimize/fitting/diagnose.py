@@ -113,6 +113,12 @@ CV_GAIN = 0.03
 SCAN_FACTORS = (0.6, 0.7, 0.8, 0.9, 1.1, 1.25, 1.5)
 """Factors on each positive (log-fitted) parameter, alone and with the others of its
 effect, at which a fit along the path looks for a better basin (see :func:`_scan`)."""
+SCAN_HEAD = 1 / 3
+"""The share of the rows, first in acquisition order, on which :func:`_scan` solves each
+point first: their misfit is part of the whole's (a row's state depends only on the rows
+before it along the path, and on nothing else solved on its own), so a point whose first
+rows already miss by more than the start does in whole cannot beat it, and is not solved
+further. A scan's points mostly miss by far more than its start. [-]"""
 CENTRE = ("external_center_x", "external_center_y", "external_center_z")
 CENTRE_OFFSETS = (-4 * MM, -2 * MM, 2 * MM, 4 * MM)
 """Moves of the external magnet's centre along each axis at which a screen of the near
@@ -436,7 +442,9 @@ def _scan(
     others of its effect (both transmissions), and with the external magnet's centre moved
     by each of ``offsets`` [m] along each free axis, and with the free parameters named in
     ``levels`` set to each of their values there [SI] (those of one effect together, every
-    combination); return the best point if it beats ``params``."""
+    combination); return the best point if it beats ``params``. Each point is solved on the
+    path's first rows first (SCAN_HEAD) and in whole only where they miss by less than
+    ``params`` does in whole."""
     moves: list[list[tuple[str, float, float]]] = []  # (name, factor, offset) each
     groups = [[n] for n in free if FREE_PARAMETERS[n].kind == "log"]
     groups += [
@@ -457,12 +465,18 @@ def _scan(
                 moves.append(
                     [(n, 0.0, v) for n, v in zip(leveled, chosen, strict=True) if v is not None]
                 )
-    measured = np.isfinite(m.position)
 
-    def misfit(params: np.ndarray) -> float:
-        position = predict(model, params, m, ordered=ordered).equilibria.position
-        r = (position - m.position)[measured]
+    def misfit(data: Measurements, params: np.ndarray) -> float:
+        position = predict(model, params, data, ordered=ordered).equilibria.position
+        r = (position - data.position)[np.isfinite(data.position)]
         return float(np.sum(r**2)) if np.isfinite(r).all() else math.inf
+
+    head = _first_rows(m)
+    bound = misfit(m, params)
+
+    def pruned(params: np.ndarray) -> float:
+        part = misfit(head, params)
+        return part if part >= bound or len(head) == len(m) else misfit(m, params)
 
     points = [params]
     for move in moves:
@@ -472,11 +486,16 @@ def _scan(
             value = moved[index(name)] * factor + offset
             moved[index(name)] = np.clip(value, spec.lower, spec.upper)
         points.append(moved)
-    values = parallel_map(misfit, points)
+    values = [bound, *parallel_map(pruned, points[1:])]
     best = int(np.argmin(values))  # the first of equals; 0: params themselves
     if best == 0 or not values[best] < values[0]:
         return None
     return {n: float(points[best][index(n)]) for n in free}
+
+
+def _first_rows(m: Measurements) -> Measurements:
+    """The first SCAN_HEAD of the rows of ``m`` in acquisition order, in that order."""
+    return m.subset(m.order()[: math.ceil(SCAN_HEAD * len(m))])
 
 
 def _centre_scan(

@@ -423,3 +423,48 @@ def test_a_causes_evidence_gives_the_final_models_error_where_a_later_refit_chan
         assert "falls from 2.76 to 0.975 mm" in text, text
         assert ("0.244 mm in the final model, hysteresis" in text) is said, text
         assert ("in the final model" in text) is said, text
+
+
+@pytest.mark.parametrize(
+    "effects", [("torsion",), ("large_deflection",), ("hysteresis", "near_field")]
+)
+def test_a_scan_that_solves_each_points_first_rows_first_chooses_as_one_that_solves_all(
+    effects, monkeypatch
+):
+    """:func:`optimize.fitting.diagnose._scan` solves each point on the path's first rows
+    (SCAN_HEAD) and goes on only where they miss by less than the start does in whole. On
+    set-ups drawn from the whole design space (random design, robot as built, effects at
+    random strengths, along the bench's path), those rows' states must be the whole path's
+    (the robot's state depends only on the rows before), and the scan must choose exactly
+    what the same scan solving every point in whole chooses."""
+    from design.model import model_for
+    from optimize.fitting import diagnose as diagnosis
+    from optimize.fitting.calibrate import default_free, predict
+    from optimize.fitting.planted import as_built, effect_strengths
+    from optimize.fitting.setups import random_design
+
+    seed = fresh_seed()
+    rng = np.random.default_rng(seed)
+    design = random_design(rng)
+    truth = {**as_built(rng, design), **effect_strengths(rng, frozenset(effects))}
+    m = synthesize_data(
+        design,
+        effects,
+        n=int(rng.integers(16, 31)),
+        noise_mm=0.2,
+        seed=seed,
+        params_override=truth,
+    ).measurements
+    model = model_for(frozenset(effects))
+    free = default_free(effects)
+    params = diagnosis._parameters(model, design, truth)
+    whole = predict(model, params, m, "driven").equilibria.position
+    head = diagnosis._first_rows(m)
+    first = predict(model, params, head, "driven").equilibria.position
+    np.testing.assert_allclose(
+        first, whole[m.order()[: len(head)]], rtol=0, atol=1e-12, err_msg=f"seed {seed}"
+    )
+    params = diagnosis._parameters(model, design, None)
+    found = diagnosis._scan(model, m, params, free)
+    monkeypatch.setattr(diagnosis, "SCAN_HEAD", 1.0)
+    assert found == diagnosis._scan(model, m, params, free), f"seed {seed}"
