@@ -355,11 +355,12 @@ def _leveled_start(
     """A start better than ``initial`` (None: the nominal design) with the free
     parameters of LEVELS not in ``unset`` (a start's values) at their levels, or None;
     solved along the bench's path where the data or ``mode`` have one. [SI]"""
-    levels = {n: v for n, v in LEVELS.items() if n in free and n not in set(unset)}
+    known = set(unset)
+    levels = {n: v for n, v in LEVELS.items() if n in free and n not in known}
     if not levels:
         return None
     params = _parameters(model, design, initial)
-    path: bool | Literal["driven"] = "driven" if m.sequence is not None or mode else False
+    path = "driven" if mode else _bench_path(m)
     return _scan(model, m, params, free, ordered=path, factors=(), levels=levels)
 
 
@@ -497,6 +498,13 @@ def _scan(
     return {n: float(points[best][index(n)]) for n in free}
 
 
+def _bench_path(m: Measurements) -> Literal["driven", False]:
+    """How a check outside the fits solves the rows of ``m``: along the bench's path
+    ("driven", :func:`predict`) where the data have an acquisition order (the states may
+    depend on it), else each on its own."""
+    return "driven" if m.sequence is not None else False
+
+
 def _first_rows(m: Measurements) -> Measurements:
     """The first SCAN_HEAD of the rows of ``m`` in acquisition order, in that order."""
     return m.subset(m.order()[: math.ceil(SCAN_HEAD * len(m))])
@@ -515,8 +523,7 @@ def _centre_scan(
     data have one: near the magnet the states depend on it), or None."""
     model = model_for(effects)
     params = _parameters(model, design, around.calibration.estimate if around is not None else None)
-    path: bool | Literal["driven"] = "driven" if m.sequence is not None else False
-    return _scan(model, m, params, free, ordered=path, factors=(), offsets=CENTRE_OFFSETS)
+    return _scan(model, m, params, free, ordered=_bench_path(m), factors=(), offsets=CENTRE_OFFSETS)
 
 
 def _cv_pays(before: float, after: float) -> bool:
@@ -787,7 +794,7 @@ def power_of_data(
         for name, value in POWER_STRENGTH.items():
             if name in EFFECT_FREE[effect]:
                 params[index(name)] = value
-        path: bool | Literal["driven"] = "driven" if m.sequence is not None else False
+        path = _bench_path(m)
         position = predict(model, params, m, path).equilibria.position
         if not np.isfinite(position[m.measured]).all():
             return {
@@ -907,8 +914,7 @@ def diagnose(
 
     def structure(fit: Fit) -> tuple[ResidualDependence, ...]:
         model = model_for(fit.effects)
-        path: Literal["driven"] | bool = "driven" if m.sequence is not None else False
-        position = predict(model, fit.calibration.params, m, path).equilibria.position
+        position = predict(model, fit.calibration.params, m, _bench_path(m)).equilibria.position
         position = np.where(np.isfinite(position), position, m.position)
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
