@@ -202,27 +202,11 @@ def test_a_fit_along_the_path_leaves_the_basin_where_the_robot_does_not_snap():
         assert err < 4 * fit.calibration.standard_error[name], name
 
 
-def test_a_fit_of_torsion_from_nominal_also_starts_from_the_transmissions_levels():
-    """Regression (seed 172425381 of the torsion + gravity test, once failed: 63 rows along
-    a path, wire 1.5 and catheter 2.8 times nominal): every start of the diagnosis, from
-    nominal, stiff and soft transmissions, ended where the catheter is 22 times nominal,
-    4x the noise's RMS, and the final model stayed at 3x. A fit of torsion from a start
-    without it also starts from its transmissions at LEVELS
-    (:data:`optimize.fitting.diagnose.LEVELS`), and a screen from the nominal design must
-    reach the noise and the truth's transmissions."""
-    from optimize.fitting.calibrate import calibrate, default_free
+def screen_from_nominal(design: Design, m, effects: frozenset[str]):
+    """The diagnosis' screening fit of ``effects`` from the nominal design alone."""
     from optimize.fitting.diagnose import SCREEN_EVALUATIONS, _fit
 
-    effects = frozenset({"torsion", "gravity"})
-    seed = 172425381
-    design, truth, noise = draw(tuple(effects), seed)
-    m = synthesize_data(
-        design, tuple(effects), noise_mm=noise, seed=seed, params_override=truth
-    ).measurements
-    limit = 1.5 * noise * np.sqrt(3)
-    stuck = calibrate(design, m, effects, default_free(effects), ordered="driven")
-    assert stuck.rmse_mm > 2 * limit  # the trap is there
-    fit = _fit(
+    return _fit(
         design,
         m,
         effects,
@@ -233,6 +217,28 @@ def test_a_fit_of_torsion_from_nominal_also_starts_from_the_transmissions_levels
         sigma=None,
         max_nfev=SCREEN_EVALUATIONS,
     )
+
+
+def test_a_fit_of_torsion_from_nominal_also_starts_from_the_transmissions_levels():
+    """Regression (seed 172425381 of the torsion + gravity test, once failed: 63 rows along
+    a path, wire 1.5 and catheter 2.8 times nominal): every start of the diagnosis, from
+    nominal, stiff and soft transmissions, ended where the catheter is 22 times nominal,
+    4x the noise's RMS, and the final model stayed at 3x. A fit of torsion from a start
+    without it also starts from its transmissions at LEVELS
+    (:data:`optimize.fitting.diagnose.LEVELS`), and a screen from the nominal design must
+    reach the noise and the truth's transmissions."""
+    from optimize.fitting.calibrate import calibrate, default_free
+
+    effects = frozenset({"torsion", "gravity"})
+    seed = 172425381
+    design, truth, noise = draw(tuple(effects), seed)
+    m = synthesize_data(
+        design, tuple(effects), noise_mm=noise, seed=seed, params_override=truth
+    ).measurements
+    limit = 1.5 * noise * np.sqrt(3)
+    stuck = calibrate(design, m, effects, default_free(effects), ordered="driven")
+    assert stuck.rmse_mm > 2 * limit  # the trap is there
+    fit = screen_from_nominal(design, m, effects)
     assert fit.calibration.rmse_mm < limit, fit.calibration.rmse_mm
     for name in ("wire_torsion_scale", "catheter_torsion_scale"):
         estimate = fit.calibration.estimate[name]
@@ -246,22 +252,12 @@ def test_a_fit_of_torsion_from_nominal_also_starts_from_a_quarter_of_its_stiffne
     and the catheter at 0.52, and the diagnosis' final model at 3x the noise's
     cross-validated RMSE. The levels span 0.25-4x nominal; a screen from the nominal design
     must reach the truth's transmissions."""
-    from optimize.fitting.diagnose import EFFECT_FREE, SCREEN_EVALUATIONS, _fit
+    from optimize.fitting.diagnose import EFFECT_FREE
 
     effects = frozenset({"torsion"})
     case = draw_planted(np.random.default_rng([3, 3, 1]), effects)
     assert case.truth["wire_torsion_scale"] < 0.4, case.truth  # the draw is the one above
-    fit = _fit(
-        case.design,
-        case.measurements,
-        effects,
-        k=5,
-        seed=0,
-        cv=False,
-        starts=[None],
-        sigma=None,
-        max_nfev=SCREEN_EVALUATIONS,
-    )
+    fit = screen_from_nominal(case.design, case.measurements, effects)
     for name in EFFECT_FREE["torsion"]:
         estimate, truth = fit.calibration.estimate[name], case.truth[name]
         assert abs(math.log(estimate / truth)) < math.log(1.25), (name, estimate, truth)
