@@ -492,3 +492,64 @@ def test_a_scan_that_solves_each_points_first_rows_first_chooses_as_one_that_sol
     found = diagnosis._scan(model, m, params, free)
     monkeypatch.setattr(diagnosis, "SCAN_HEAD", 1.0)
     assert found == diagnosis._scan(model, m, params, free), f"seed {seed}"
+
+
+@pytest.mark.parametrize(
+    "effects", [("torsion",), ("large_deflection", "gravity"), ("near_field",)]
+)
+def test_misfits_of_many_parameter_sets_solved_at_once_are_each_sets_own(effects, monkeypatch):
+    """:func:`optimize.fitting.diagnose._misfits` solves the rows of several parameter
+    vectors in one solve (per-column parameters). On set-ups drawn from the whole design
+    space (random design, robot as built, effects at random strengths, rows on their own),
+    each point's misfit must be that of its own :func:`predict` (a separately made solve),
+    a row without a state the same in both (inf), and the scan on rows on their own must
+    choose what the scan solving every row of every point chooses."""
+    from design.model import model_for
+    from design.registry import index
+    from optimize.fitting import diagnose as diagnosis
+    from optimize.fitting.calibrate import FREE_PARAMETERS, default_free, predict
+    from optimize.fitting.planted import as_built, effect_strengths
+    from optimize.fitting.setups import random_design
+
+    seed = fresh_seed()
+    rng = np.random.default_rng(seed)
+    for _ in range(10):  # a set-up where most rows have a state (not all pulled in)
+        design = random_design(rng)
+        truth = {**as_built(rng, design), **effect_strengths(rng, frozenset(effects))}
+        m = synthesize_data(
+            design,
+            effects,
+            n=int(rng.integers(16, 41)),
+            noise_mm=0.3,
+            seed=seed,
+            params_override=truth,
+        ).measurements
+        if m.seen.mean() >= 0.5:
+            break
+    model = model_for(frozenset(effects))
+    free = default_free(effects)
+    nominal = diagnosis._parameters(model, design, None)
+    exact = diagnosis._parameters(model, design, truth)
+    points = [nominal, exact]
+    for _ in range(5):  # about the truth, where the rows have states
+        p = exact.copy()
+        for name in free:
+            spec = FREE_PARAMETERS[name]
+            step = 0.3 * rng.normal() * spec.prior
+            value = (
+                p[index(name)] * np.exp(step)
+                if spec.kind == "log"
+                else p[index(name)] + step * spec.step
+            )
+            p[index(name)] = np.clip(value, spec.lower, spec.upper)
+        points.append(p)
+    together = diagnosis._misfits(model, m, points)
+    for i, p in enumerate(points):
+        position = predict(model, p, m, ordered=False).equilibria.position
+        r = (position - m.position)[np.isfinite(m.position)]
+        alone = float(np.sum(r**2)) if np.isfinite(r).all() else np.inf
+        assert together[i] == pytest.approx(alone, rel=1e-9), f"seed {seed}, point {i}"
+    assert np.isfinite(together[1:]).sum() >= 3, f"seed {seed}: too few points solve every row"
+    found = diagnosis._scan(model, m, nominal, free, ordered=False)
+    monkeypatch.setattr(diagnosis, "SCAN_HEAD", 1.0)
+    assert found == diagnosis._scan(model, m, nominal, free, ordered=False), f"seed {seed}"
