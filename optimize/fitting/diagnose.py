@@ -450,7 +450,8 @@ def _scan(
     ``levels`` set to each of their values there [SI] (those of one effect together, every
     combination); return the best point if it beats ``params``. Each point is solved on the
     path's first rows first (SCAN_HEAD) and in whole only where they miss by less than
-    ``params`` does in whole. Rows solved on their own are solved for all points at once
+    ``params`` does in whole (along a path, less than the best point before it in the
+    worker's share). Rows solved on their own are solved for all points at once
     (:func:`_misfits`; a path, point by point)."""
     moves: list[list[tuple[str, float, float]]] = []  # (name, factor, offset) each
     groups = [[n] for n in free if FREE_PARAMETERS[n].kind == "log"]
@@ -482,6 +483,12 @@ def _scan(
             moved[index(name)] = np.clip(value, spec.lower, spec.upper)
         points.append(moved)
     head = _first_rows(m)
+    # interleaved shares of the points, each in their order (the workers' loads even)
+    shares = [
+        s
+        for s in (np.arange(1, len(points))[w :: worker_count()] for w in range(worker_count()))
+        if s.size
+    ]
     if ordered:  # each point's path on its own, its first rows first
 
         def misfit(data: Measurements, params: np.ndarray) -> float:
@@ -490,25 +497,32 @@ def _scan(
 
         bound = misfit(m, params)
 
-        def pruned(params: np.ndarray) -> float:
-            part = misfit(head, params)
-            return part if part >= bound or len(head) == len(m) else misfit(m, params)
+        def share(idx: np.ndarray) -> np.ndarray:
+            """Each point's misfit, in whole only where its first rows miss by less than
+            the best whole misfit before it (a point that misses those rows by more
+            cannot be the best)."""
+            best, values = bound, np.empty(idx.size)
+            for j, i in enumerate(idx):
+                values[j] = misfit(head, points[i])
+                if values[j] < best and len(head) < len(m):
+                    values[j] = misfit(m, points[i])
+                best = min(best, values[j])
+            return values
 
-        values = [bound, *parallel_map(pruned, points[1:])]
     else:  # every row of every point in one solve: the first rows, then the others' rest
         rest = m.subset(m.order()[len(head) :])
         bound = float(_misfits(model, m, [params])[0])
 
-        def batch(chunk: list[np.ndarray]) -> np.ndarray:
-            part = _misfits(model, head, chunk)
+        def share(idx: np.ndarray) -> np.ndarray:
+            part = _misfits(model, head, [points[i] for i in idx])
             go = np.flatnonzero(part < bound)
             if go.size and len(rest):
-                part[go] += _misfits(model, rest, [chunk[i] for i in go])
+                part[go] += _misfits(model, rest, [points[idx[j]] for j in go])
             return part
 
-        chunks = [c for c in np.array_split(np.arange(1, len(points)), worker_count()) if c.size]
-        parts = parallel_map(lambda c: batch([points[i] for i in c]), chunks)
-        values = [bound, *(float(v) for v in np.concatenate(parts))] if parts else [bound]
+    values = np.full(len(points), bound)
+    for idx, found in zip(shares, parallel_map(share, shares), strict=True):
+        values[idx] = found
     best = int(np.argmin(values))  # the first of equals; 0: params themselves
     if best == 0 or not values[best] < values[0]:
         return None
