@@ -111,10 +111,28 @@ more than they save (the large-deflection rod's Newton step, 2 columns: 283 us t
 run mostly on a few columns."""
 
 
+_threads = THREADS
+
+
+def use_threads(count: int) -> None:
+    """Threads of the maps made from now on (1: none). A process whose siblings keep the
+    other cores busy, a worker of :mod:`optimize.fitting.workers`, gains nothing from them
+    and pays for starting them at every call: with both cores busy, a 64-column Newton
+    step of the torsion model took 618 us threaded against 280 us serial."""
+    global _threads
+    _threads = count
+
+
+def map_threads(size: int) -> int:
+    """The threads a map of ``size`` columns made now runs on."""
+    return _threads if size >= THREADED_FROM else 1
+
+
 def mapped(function: ca.Function, size: int) -> ColumnEvaluator:
-    """``function`` mapped over ``size`` columns (threaded from THREADED_FROM)."""
-    if size >= THREADED_FROM:
-        return ColumnEvaluator(function.map(size, "thread", THREADS))
+    """``function`` mapped over ``size`` columns (on :func:`map_threads` threads)."""
+    threads = map_threads(size)
+    if threads > 1:
+        return ColumnEvaluator(function.map(size, "thread", threads))
     return ColumnEvaluator(function.map(size))
 
 
@@ -160,7 +178,10 @@ class ColumnEvaluator:
 
 class BufferEvaluator:
     """Calls a CasADi function on float64 buffers (no DM conversions, which cost more than
-    a compiled evaluation of the rod)."""
+    a compiled evaluation of the rod). Inputs that stay the same over many calls can be
+    set once (:meth:`fix`) and the others given to :meth:`views`, which returns the
+    outputs as views of the buffers (no copies: a path's Newton corrector makes ~10^3
+    calls of ~15 us each, and the copies and conversions around them cost twice that)."""
 
     def __init__(self, function: ca.Function) -> None:
         self.function = function
@@ -171,15 +192,17 @@ class BufferEvaluator:
             self.buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
         for i, o in enumerate(self.outs):
             self.buffer.set_res(i, memoryview(o))  # type: ignore[call-arg, arg-type]
-        self.shapes = [
-            (function.size2_out(i), function.size1_out(i)) for i in range(function.n_out())
-        ]
+        shapes = [(function.size2_out(i), function.size1_out(i)) for i in range(function.n_out())]
+        self._views = [o.reshape(shape).T for o, shape in zip(self.outs, shapes, strict=True)]
 
-    def _evaluate(self, args: tuple[ArrayLike, ...]) -> None:
-        for buf, a in zip(self.args, args, strict=True):
-            buf[:] = np.ravel(a, order="F")  # (the assignment converts to float64)
+    def fix(self, i: int, value: ArrayLike) -> None:
+        """Set input ``i`` for the calls of :meth:`views` that follow."""
+        self.args[i][:] = np.ravel(value, order="F")  # (the assignment converts to float64)
+
+    def views(self, *args: np.ndarray) -> list[np.ndarray]:
+        """The outputs for the first inputs ``args`` and the fixed others, as views of the
+        buffers: valid until the next call (copy what must outlive it)."""
+        for buf, a in zip(self.args, args, strict=False):
+            buf[:] = a.ravel(order="F")
         self.trigger()
-
-    def __call__(self, *args: ArrayLike) -> list[np.ndarray]:
-        self._evaluate(args)
-        return [o.reshape(shape).T.copy() for o, shape in zip(self.outs, self.shapes, strict=True)]
+        return self._views

@@ -51,7 +51,13 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from design.compiled import BufferEvaluator, ColumnEvaluator, compile_functions, mapped
+from design.compiled import (
+    BufferEvaluator,
+    ColumnEvaluator,
+    compile_functions,
+    map_threads,
+    mapped,
+)
 from design.friction import play
 from design.model import RingPairModel
 from design.records import Design
@@ -364,7 +370,7 @@ class _Kernels:
         )
 
     def _mapped(self, function: ca.Function, size: int) -> ColumnEvaluator:
-        key = (function.name(), size)
+        key = (function.name(), size, map_threads(size))
         with self._lock:
             if key not in self._maps:
                 self._maps[key] = mapped(function, size)
@@ -438,8 +444,8 @@ def _fold_free(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
     rod: along a branch followed continuously from rest, where it is the elastic
     stiffness, the lowest eigenvalue of the second variation can only reach zero where
     dr/dx is singular)."""
-    if model.linear_rod:
-        return np.all(monitor > 0, axis=0)
+    if model.linear_rod:  # (the method, not np.all: this runs ~10^5 times a fit)
+        return (monitor > 0).all(axis=0)
     with np.errstate(invalid="ignore"):
         return np.linalg.det(_matrices(model, monitor)[:, 0]) > 0
 
@@ -1211,6 +1217,8 @@ def solve_sequence(
         effective = play(command, width)
     corrections = _path_evaluator(model, threading.get_ident())
     scale = model.unknown_scale(params)
+    corrections.fix(2, params)  # the same along the whole path
+    corrections.fix(3, scale)
     n_rod = model.n_rod
     torsion = model.n_unknowns > n_rod
     step_tolerance = float(_step_tolerance(model, np.ones(1))[0])
@@ -1219,16 +1227,17 @@ def solve_sequence(
         """Newton from x0 at the command c; (state, converged on the stable side)."""
         x, last, k = x0, math.inf, 0
         while True:
-            states, sizes, monitors, clearances = corrections(x, c, params, scale)
-            # (plain floats: this loop runs ~10^5 times a fit)
+            # (views of the evaluator's buffers, and plain floats: this loop runs ~10^5
+            # times a fit)
+            states, sizes, monitors, clearances = corrections.views(x, c)
             for j, (size, largest, residual, total) in enumerate(zip(*sizes.tolist(), strict=True)):
                 finite = math.isfinite(size) and math.isfinite(total)
                 if not finite or (k > 0 and size > CONTRACTION * last):
                     return x, False
                 if largest < step_tolerance or residual < TOLERANCE:
                     ok = _fold_free(model, monitors[:, j : j + 1])[0] and clearances[0, j] >= 0
-                    return states[:, j], bool(ok)
-                x, last, k = states[:, j], size, k + 1
+                    return states[:, j].copy(), bool(ok)
+                x, last, k = states[:, j].copy(), size, k + 1
                 if k == MAX_CORRECTIONS + 2:
                     return x, False
 

@@ -20,7 +20,7 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from design.compiled import ColumnEvaluator, compile_function, mapped
+from design.compiled import ColumnEvaluator, compile_function, map_threads, mapped
 from design.equilibrium import Equilibria, kernels, solve_equilibria, solve_sequence
 from design.friction import play, play_step
 from design.model import RingPairModel, model_for
@@ -86,8 +86,13 @@ def built_model(effects: frozenset[str]) -> RingPairModel:
     return model
 
 
-@lru_cache(maxsize=64)
 def _mapped_sensitivity(model: RingPairModel, size: int) -> ColumnEvaluator:
+    return _mapped_on(model, size, map_threads(size))
+
+
+@lru_cache(maxsize=64)
+def _mapped_on(model: RingPairModel, size: int, threads: int) -> ColumnEvaluator:
+    """(``threads``: part of the key, as :func:`design.compiled.use_threads` changes it)"""
     return mapped(sensitivity_function(model), size)
 
 

@@ -21,6 +21,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
+from design.compiled import use_threads
+
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -52,6 +54,7 @@ def worker_count() -> int:
 def _start() -> None:
     global _IN_WORKER
     _IN_WORKER = True
+    use_threads(1)  # the other workers keep the other cores busy
 
 
 def _call(i: int) -> Any:

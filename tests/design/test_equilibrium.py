@@ -152,6 +152,35 @@ def test_batch_equals_one_by_one_across_chunks(demonstrator, monkeypatch):
     assert batch.converged.all() and batch.stable.all()
 
 
+@pytest.mark.parametrize("effects", [(), ("torsion",), ("large_deflection", "near_field")])
+def test_states_on_threaded_maps_equal_serial_ones(effects, monkeypatch):
+    """Workers run their maps on one thread (design.compiled.use_threads), the parent on
+    two: on set-ups drawn from the whole design space, 40-200 configurations (maps of 32
+    columns and more, which are threaded), the states must be the same to the last bit."""
+    import design.compiled as compiled
+    from design.model import model_for
+    from optimize.fitting.setups import random_design
+
+    seed = int(np.random.SeedSequence().entropy % 2**32)
+    rng = np.random.default_rng(seed)
+    model = model_for(frozenset(effects))
+    monkeypatch.setattr(compiled, "_threads", compiled.THREADS)
+    for _ in range(10):  # a set-up where most configurations have a state
+        params = model.parameters(random_design(rng))
+        t1, t2 = rng.uniform(-np.pi, np.pi, (2, int(rng.integers(40, 201))))
+        threaded = solve_equilibria(model, params, t1, t2)
+        if threaded.converged.mean() >= 0.5:
+            break
+    monkeypatch.setattr(compiled, "_threads", 1)
+    runs = [threaded, solve_equilibria(model, params, t1, t2)]
+    assert compiled.map_threads(64) == 1 and compiled.THREADS > 1
+    assert threaded.converged.mean() >= 0.5, f"seed {seed}: no set-up with states drawn"
+    for name in ("unknowns", "position", "converged", "stable", "snapped"):
+        np.testing.assert_array_equal(
+            getattr(runs[0], name), getattr(runs[1], name), err_msg=f"seed {seed}: {name}"
+        )
+
+
 def test_tip_frame_is_orthonormal_and_right_handed(demonstrator):
     eq = solve_design(demonstrator, np.linspace(0, 6, 11), np.linspace(1, 2, 11))
     for frame in eq.frame:
