@@ -255,7 +255,7 @@ class _Kernels:
         for leap in compiled[4:]:  # run by name: "leap1", "leap2", ...
             setattr(self, leap.name(), leap)
         self.corrections = self._corrections(model, self.newton)
-        self._maps: dict[tuple[str, int], ColumnEvaluator] = {}
+        self._maps: dict[tuple[str, int, int], ColumnEvaluator] = {}
         self._tiles: dict[tuple[bytes, int], np.ndarray] = {}
         self._lock = threading.Lock()
 
@@ -445,7 +445,7 @@ def _fold_free(model: RingPairModel, monitor: np.ndarray) -> np.ndarray:
     stiffness, the lowest eigenvalue of the second variation can only reach zero where
     dr/dx is singular)."""
     if model.linear_rod:  # (the method, not np.all: this runs ~10^5 times a fit)
-        return (monitor > 0).all(axis=0)
+        return np.asarray((monitor > 0).all(axis=0))
     with np.errstate(invalid="ignore"):
         return np.linalg.det(_matrices(model, monitor)[:, 0]) > 0
 
