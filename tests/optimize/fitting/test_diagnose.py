@@ -449,6 +449,26 @@ def test_a_causes_evidence_gives_the_final_models_error_where_a_later_refit_chan
         assert ("in the final model" in text) is said, text
 
 
+def drawn_bench(rng, seed, effects, rows, noise_mm):
+    """A random design (the whole design space), its robot as built with ``effects`` at
+    random strengths, and its bench data along a path: (design, truth, measurements);
+    ``rows``: the range of configurations drawn from."""
+    from optimize.fitting.planted import as_built, effect_strengths
+    from optimize.fitting.setups import random_design
+
+    design = random_design(rng)
+    truth = {**as_built(rng, design), **effect_strengths(rng, frozenset(effects))}
+    m = synthesize_data(
+        design,
+        effects,
+        n=int(rng.integers(*rows)),
+        noise_mm=noise_mm,
+        seed=seed,
+        params_override=truth,
+    ).measurements
+    return design, truth, m
+
+
 @pytest.mark.parametrize(
     "effects", [("torsion",), ("large_deflection",), ("hysteresis", "near_field")]
 )
@@ -464,21 +484,10 @@ def test_a_scan_that_solves_each_points_first_rows_first_chooses_as_one_that_sol
     from design.model import model_for
     from optimize.fitting import diagnose as diagnosis
     from optimize.fitting.calibrate import default_free, predict
-    from optimize.fitting.planted import as_built, effect_strengths
-    from optimize.fitting.setups import random_design
 
     seed = fresh_seed()
     rng = np.random.default_rng(seed)
-    design = random_design(rng)
-    truth = {**as_built(rng, design), **effect_strengths(rng, frozenset(effects))}
-    m = synthesize_data(
-        design,
-        effects,
-        n=int(rng.integers(16, 31)),
-        noise_mm=0.2,
-        seed=seed,
-        params_override=truth,
-    ).measurements
+    design, truth, m = drawn_bench(rng, seed, effects, (16, 31), 0.2)
     model = model_for(frozenset(effects))
     free = default_free(effects)
     params = diagnosis._parameters(model, design, truth)
@@ -508,22 +517,11 @@ def test_misfits_of_many_parameter_sets_solved_at_once_are_each_sets_own(effects
     from design.registry import index
     from optimize.fitting import diagnose as diagnosis
     from optimize.fitting.calibrate import FREE_PARAMETERS, default_free, predict
-    from optimize.fitting.planted import as_built, effect_strengths
-    from optimize.fitting.setups import random_design
 
     seed = fresh_seed()
     rng = np.random.default_rng(seed)
     for _ in range(10):  # a set-up where most rows have a state (not all pulled in)
-        design = random_design(rng)
-        truth = {**as_built(rng, design), **effect_strengths(rng, frozenset(effects))}
-        m = synthesize_data(
-            design,
-            effects,
-            n=int(rng.integers(16, 41)),
-            noise_mm=0.3,
-            seed=seed,
-            params_override=truth,
-        ).measurements
+        design, truth, m = drawn_bench(rng, seed, effects, (16, 41), 0.3)
         if m.seen.mean() >= 0.5:
             break
     model = model_for(frozenset(effects))
