@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -421,10 +421,11 @@ class _Kernels:
         return [acc[0] if len(acc) == 1 else np.concatenate(acc, axis=1) for acc in outs]
 
 
-@lru_cache(maxsize=32)
+@cache
 def kernels(model: RingPairModel) -> _Kernels:
-    """The compiled solver functions of ``model`` (built and compiled once per process;
-    the shared library is cached on disk by :mod:`design.compiled`)."""
+    """The compiled solver functions of ``model`` (built and compiled once per process,
+    kept for every model: there is one per set of effects, and a diagnosis fits up to all
+    32 of them; the shared library is cached on disk by :mod:`design.compiled`)."""
     return _Kernels(model)
 
 

@@ -14,7 +14,7 @@ inputs and outputs.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 from typing import Literal
 
 import casadi as ca
@@ -43,10 +43,12 @@ SENSITIVE = FITTED
 ones calibration can free (:data:`design.registry.FITTED`)."""
 
 
-@lru_cache(maxsize=16)
+@cache
 def sensitivity_function(model: RingPairModel) -> ca.Function:
     """(x, command, params) -> (out, d_out) at an equilibrium x of ``model``, compiled
-    when small enough (COMPILE_LIMIT).
+    when small enough (COMPILE_LIMIT); built once per process and kept for every model
+    (a diagnosis screens up to all 32 sets of effects, and building one takes up to 2 s:
+    a cache of 16 built most of them again at every screen).
 
     out : shape (5,), tip position (base frame) [m] and tip ring angles [rad].
     d_out : shape (5, len(SENSITIVE) + 2), total derivatives of ``out`` along the
