@@ -127,6 +127,10 @@ def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
             "--disable-gpu",
             "--no-sandbox",
             "--hide-scrollbars",
+            # draw every figure before the shot: on a loaded machine a shot without these
+            # once caught the page with a figure not yet painted (CI of eebbbee)
+            "--run-all-compositor-stages-before-draw",
+            "--virtual-time-budget=10000",
             f"--screenshot={shot}",
             "--window-size=1200,2600",
             (out / "report.html").resolve().as_uri(),
@@ -358,6 +362,10 @@ def test_the_first_screen_carries_the_answer_in_headless_chromium(study_run, tmp
             "--disable-gpu",
             "--no-sandbox",
             "--hide-scrollbars",
+            # draw every figure before the shot: on a loaded machine a shot without these
+            # once caught the page with a figure not yet painted (CI of eebbbee)
+            "--run-all-compositor-stages-before-draw",
+            "--virtual-time-budget=10000",
             f"--screenshot={shot}",
             "--window-size=1280,800",
             (out / "report.html").as_uri(),
