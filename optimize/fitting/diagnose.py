@@ -55,7 +55,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Literal
 
@@ -104,7 +104,7 @@ from optimize.fitting.structure import (
     features,
     residual_structure,
 )
-from optimize.fitting.workers import parallel_map, worker_count
+from optimize.fitting.workers import Background, parallel_map, worker_count
 
 BIC_DROP = 10.0
 """Accept an effect only if the BIC falls by more than this (Kass & Raftery: > 10 is very
@@ -734,13 +734,37 @@ def screen_starts(
     guesses = {n: v for e in added for n, v in screened.get(e, {}).items()}
     own = [n for e in added for n in EFFECT_FREE[e]]
     nested = {n: NESTED_START[n] for n in own if n in NESTED_START}
-    soft = {n: SOFT_START[n] for n in own if n in SOFT_START}
     for extra in (guesses, nested):
         if extra:
             starts.append({**current.calibration.estimate, **extra})
-    if soft:  # from the nominal design, as the current estimates may mimic the effect
-        starts.append(soft)
-    return starts
+    return [*starts, *_soft_start(added)]
+
+
+def _soft_start(added: frozenset[str]) -> Starts:
+    """SOFT_START of the ``added`` effects' own parameters, from the nominal design (the
+    current estimates may mimic the effect), where they have any."""
+    soft = {n: SOFT_START[n] for e in added for n in EFFECT_FREE[e] if n in SOFT_START}
+    return [soft] if soft else []
+
+
+def _on_top(effects: frozenset[str], names: Sequence[str]) -> tuple[str, ...]:
+    """The free parameters of ``effects`` as a candidate on top of a fit with free
+    ``names``: their own, and those of ``names`` (what :func:`_refine` freed there)."""
+    own = default_free(effects)
+    return (*own, *(n for n in names if n not in own))
+
+
+Job = tuple[frozenset[str], Start | str, tuple[str, ...]]
+"""A screening fit: the candidate's effects, where it starts, its free parameters."""
+
+
+def _job_key(job: Job) -> Hashable:
+    """``job`` as a key: equal for jobs with equal effects, free parameters and starts (the
+    nominal design, equal values, STIFF_FIRST); a start from a fit is that fit's own."""
+    effects, start, free = job
+    if isinstance(start, CalibrationResult):
+        return effects, id(start), free
+    return effects, tuple(sorted(start.items())) if isinstance(start, Mapping) else start, free
 
 
 def _not_applicable(design: Design, m: Measurements, effect: str) -> str:
@@ -959,9 +983,6 @@ def diagnose(
         else:
             remaining.append(name)
     row_sigma(m, sigma)
-    say("baseline")
-    current = _fit(design, m, frozenset(), k=k, seed=seed, cv=True, starts=[None], sigma=sigma)
-    baseline = current
 
     def structure(fit: Fit) -> tuple[ResidualDependence, ...]:
         model = model_for(fit.effects)
@@ -970,26 +991,19 @@ def diagnose(
         return residual_structure(fit.calibration.residuals, features(design, m, position))
 
     def free_for(effects: frozenset[str]) -> tuple[str, ...]:
-        """The free parameters of ``effects`` as a candidate on top of ``current``: their
-        own, and what :func:`_refine` freed in ``current``."""
-        own = default_free(effects)
-        return (*own, *(n for n in current.calibration.names if n not in own))
+        """The free parameters of ``effects`` as a candidate on top of ``current``."""
+        return _on_top(effects, current.calibration.names)
 
     def fitted(
-        effects: frozenset[str], start: Start | str, max_nfev: int | None
+        effects: frozenset[str], start: Start | str, free: Sequence[str], max_nfev: int | None
     ) -> Fit | Exception:
-        """A fit of ``effects`` as a candidate on top of ``current`` from ``start``, or why
-        it failed (a candidate's failure is reported; the search goes on)."""
+        """A fit of ``effects`` with ``free`` parameters (as a candidate on top of
+        ``current``, :func:`_on_top`) from ``start``, or why it failed (a candidate's
+        failure is reported; the search goes on)."""
         try:
             if isinstance(start, str):  # STIFF_FIRST
                 try:
-                    found = stiff_start(
-                        design,
-                        m,
-                        effects,
-                        free_for(effects),
-                        sigma=sigma,
-                    )
+                    found = stiff_start(design, m, effects, free, sigma=sigma)
                 except Exception as exc:  # a start not found is skipped, as one unsolved
                     return UnsolvedStart(f"{STIFF_FIRST}: {_reason(exc)}")
                 assert found is not None  # only torsion candidates get this start
@@ -1004,10 +1018,28 @@ def diagnose(
                 starts=[start],
                 sigma=sigma,
                 max_nfev=max_nfev,
-                free=free_for(effects),
+                free=free,
             )
         except Exception as exc:
             return exc
+
+    # The first screen's jobs from the nominal design do not depend on the baseline: they
+    # start in a background worker while this process fits it (a core otherwise idle).
+    base_names = default_free(frozenset())
+    early: list[Job] = [
+        (e, start, _on_top(e, base_names))
+        for e in (frozenset({name}) for name in remaining)
+        for start in [None, *_soft_start(e), *([STIFF_FIRST] if "torsion" in e else [])]
+    ]
+    background = Background(lambda job: fitted(*job, SCREEN_EVALUATIONS), early)
+    say("baseline")
+    first = _fit(design, m, frozenset(), k=k, seed=seed, cv=False, starts=[None], sigma=sigma)
+    ahead: Background[Job, Fit | Exception] | None = background
+    if _noise_consistent(first, m) or first.calibration.names != base_names:
+        background.cancel()  # not screened, or not on top of these free parameters
+        ahead = None
+    current = _cross_validated(design, m, first, k=k, seed=seed, sigma=sigma)
+    baseline = current
 
     def candidate(effects: frozenset[str], outcomes: Sequence[Fit | Exception]) -> Candidate:
         """The candidate ``effects`` with the best of its fits from several starts, as
@@ -1028,23 +1060,36 @@ def diagnose(
         (:mod:`optimize.fitting.workers`), those of the large-deflection rod (the costliest
         to solve) first, so the workers finish together; a candidate keeps its best start
         as :func:`_fit` would (one that solves every row, then the least misfit)."""
+        nonlocal ahead
         effects = [current.effects | a for a in added]
         for e in effects:
             built_model(e)
-        jobs: list[tuple[frozenset[str], Start | str]] = [
-            (e, start) for e in effects for start in screen_starts(current, e, screened)
+        jobs: list[Job] = [
+            (e, start, free_for(e))
+            for e in effects
+            for start in screen_starts(current, e, screened)
         ]
-        jobs += [(e, STIFF_FIRST) for e in effects if "torsion" in e - current.effects]
+        jobs += [(e, STIFF_FIRST, free_for(e)) for e in effects if "torsion" in e - current.effects]
         for e in effects:
             if "near_field" in e - current.effects:
                 for around in (current, None):
                     moved = _centre_scan(design, m, around, e, free_for(e))
                     if moved is not None:
-                        jobs.append((e, moved))
+                        jobs.append((e, moved, free_for(e)))
         jobs.sort(key=lambda job: "large_deflection" not in job[0])  # stable
-        outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), jobs)
+        # the jobs the background worker took are not run again (it finishes them beside
+        # the others); those it did not start are run with the others
+        taken = ahead.stop() if ahead is not None else []
+        started = {_job_key(job) for job in taken}
+        todo = [job for job in jobs if _job_key(job) not in started]
+        outcomes = parallel_map(lambda job: fitted(*job, SCREEN_EVALUATIONS), todo)
+        done = dict(zip(map(_job_key, todo), outcomes, strict=True))
+        if ahead is not None:
+            done.update(zip(map(_job_key, taken), ahead.results(), strict=True))
+            ahead = None
+        outcomes = [done[_job_key(job)] for job in jobs]
         found = [
-            candidate(e, [r for (e_, _), r in zip(jobs, outcomes, strict=True) if e_ == e])
+            candidate(e, [r for (e_, *_), r in zip(jobs, outcomes, strict=True) if e_ == e])
             for e in effects
         ]
         for c in found:
@@ -1053,7 +1098,9 @@ def diagnose(
 
     def in_full(c: Candidate) -> Candidate:
         assert c.fit is not None
-        return candidate(c.effects, [fitted(c.effects, c.fit.calibration, None)])
+        return candidate(
+            c.effects, [fitted(c.effects, c.fit.calibration, free_for(c.effects), None)]
+        )
 
     def decide(round_: list[Candidate]) -> Candidate | None:
         """Fit in full every candidate whose screening BIC falls by more than BIC_DROP (in
@@ -1186,6 +1233,8 @@ def diagnose(
         refined = _refine(design, m, current, tried, k=k, seed=seed, sigma=sigma, say=say)
         if refined is not current:
             current, s_current = refined, structure(refined)
+    if ahead is not None:  # (not screened: the search ended before)
+        ahead.cancel()
     if remaining and _noise_consistent(current, m):
         for name in remaining:
             effects = current.effects | {name}
