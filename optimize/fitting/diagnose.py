@@ -595,8 +595,9 @@ def _refine(
 ) -> Fit:
     """The current model refitted with the parameters its effects make separable
     (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`, e.g. the field's strength under
-    gravity) also free, if that pays as an effect must (BIC and cross-validated RMSE);
-    else ``current``. The refit is recorded in ``tried`` either way."""
+    gravity) also free, if that pays as an effect must (BIC, then cross-validated RMSE:
+    a refit whose BIC does not pass is not cross-validated); else ``current``. The refit
+    is recorded in ``tried`` either way."""
     free = current.calibration.names
     extra = [
         n for e in sorted(current.effects) for n in EFFECT_SEPARATES.get(e, ()) if n not in free
@@ -612,20 +613,25 @@ def _refine(
             current.effects,
             k=k,
             seed=seed,
-            cv=True,
+            cv=False,
             starts=[current.calibration],
             sigma=sigma,
             free=(*free, *extra),
         )
+        change = fit.bic() - current.bic()
+        if not change < -BIC_DROP:
+            verdict = f"rejected: BIC {change:+.1f}, not below -{BIC_DROP:g} (not cross-validated)"
+            tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
+            return current
+        fit = _cross_validated(design, m, fit, k=k, seed=seed, sigma=sigma)
     except Exception as exc:  # reported; the final model stays
         tried[name] = Candidate(
             current.effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}"
         )
         return current
-    change = fit.bic() - current.bic()
     before, after = current.cv_rmse_mm, fit.cv_rmse_mm
     text = f"BIC {change:+.1f}, cross-validated RMSE {before:.3g} -> {after:.3g} mm"
-    better = change < -BIC_DROP and _cv_pays(before, after)
+    better = _cv_pays(before, after)
     verdict = f"accepted: {text}" if better else f"rejected: {text}"
     tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
     return fit if better else current
