@@ -980,15 +980,21 @@ def held_out_inflation(jacobian: np.ndarray, fold: np.ndarray, position: np.ndar
     (Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 2nd ed.,
     sec. 7.10: the leave-one-out form e_i / (1 - H_ii)).
     """
-    j = np.asarray(jacobian, float)
-    hat = j @ np.linalg.pinv(j.T @ j, rcond=1e-10, hermitian=True) @ j.T
+    # H from J's own singular vectors, an exact projection to rounding (from (J^T J)^+ it is
+    # not where J is ill-conditioned, and I - H_ff of a fold whose configurations alone fix
+    # a parameter, singular in theory, then had eigenvalues of either sign around 1e-9: a
+    # negative held-out trace, a drawn null set of 16 rows). The same rank as (J^T J)^+ at
+    # rcond 1e-10: singular values above 1e-5 of the largest.
+    u, sv, _ = np.linalg.svd(np.asarray(jacobian, float), full_matrices=False)
+    u = u[:, sv > 1e-5 * sv.max(initial=0.0)] if sv.size else u
+    hat = u @ u.T
     held = 0.0
     for f in np.unique(fold[fold >= 0]):
         i = np.flatnonzero(fold == f)
         block = np.linalg.pinv(np.eye(i.size) - hat[np.ix_(i, i)], rcond=1e-12)
         held += float(np.trace(block[np.ix_(position[i], position[i])]))
     fitted = float(np.sum(1.0 - np.diag(hat)[position]))
-    return math.sqrt(held / fitted) if fitted > 0 else math.nan
+    return math.sqrt(held / fitted) if fitted > 0 and held >= 0 else math.nan
 
 
 def _continued(
