@@ -9,6 +9,8 @@ import html
 import json
 import re
 import shutil
+import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -106,20 +108,8 @@ def test_bad_study_is_exit_2_and_writes_nothing(tmp_path, pareto_study):
     assert not (tmp_path / "o").exists()
 
 
-def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
-    import subprocess
-
-    browser = report_html.browser()
-    if browser is None:
-        pytest.skip("Chromium is not installed (Debian package 'chromium'; .ci/run installs it)")
-    _, out, _, _ = study_run
-    # The printed report: every page's images came along (the figures are ~100 kB each).
-    pdf = (out / "report.pdf").read_bytes()
-    assert pdf.startswith(b"%PDF") and len(pdf) > 200_000
-    assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 3
-    manifest = json.loads((out / "manifest.json").read_text())
-    assert "report.pdf" in {f["path"] for f in manifest["files"]}
-    shot = tmp_path / "report.png"
+def _screenshot(browser: str, page: Path, shot: Path, size: str) -> np.ndarray:
+    """Headless Chromium's screenshot of ``page`` in a window of ``size`` ('W,H'), RGB."""
     subprocess.run(
         [
             browser,
@@ -132,14 +122,29 @@ def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
             "--run-all-compositor-stages-before-draw",
             "--virtual-time-budget=10000",
             f"--screenshot={shot}",
-            "--window-size=1200,2600",
-            (out / "report.html").resolve().as_uri(),
+            f"--window-size={size}",
+            page.resolve().as_uri(),
         ],
         check=True,
         capture_output=True,
         timeout=120,
     )
-    img = np.asarray(Image.open(shot).convert("RGB")).astype(float)
+    return np.asarray(Image.open(shot).convert("RGB"))
+
+
+def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
+    browser = report_html.browser()
+    if browser is None:
+        pytest.skip("Chromium is not installed (Debian package 'chromium'; .ci/run installs it)")
+    _, out, _, _ = study_run
+    # The printed report: every page's images came along (the figures are ~100 kB each).
+    pdf = (out / "report.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF") and len(pdf) > 200_000
+    assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 3
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert "report.pdf" in {f["path"] for f in manifest["files"]}
+    img = _screenshot(browser, out / "report.html", tmp_path / "report.png", "1200,2600")
+    img = img.astype(float)
     assert img.shape[:2] == (2600, 1200)
     # Text and embedded figures drew: dark pixels and coloured (plot) pixels both present.
     assert (img.mean(axis=2) < 100).mean() > 0.002
@@ -300,8 +305,6 @@ def _first_screen(browser: str, page, tmp_path, selectors: tuple[str, ...]) -> d
     """Where Chromium lays out each CSS selector's first element in a 1280 x 800 window:
     the page copied with a script that writes the boxes into the DOM, read back with
     --dump-dom. {selector: {"top", "bottom", "left", "right", "text"}} [CSS px]."""
-    import subprocess
-
     probe = """<script>
 const boxes = {};
 for (const s of SELECTORS) {
@@ -352,29 +355,8 @@ def test_the_first_screen_carries_the_answer_in_headless_chromium(study_run, tmp
         assert 0 <= box["top"] < box["bottom"] <= 800, (selector, box)
         assert 0 <= box["left"] < box["right"] <= 1280, (selector, box)
     # and Chromium drew it there: the headline's blue in the screenshot's headline box
-    shot = tmp_path / "first.png"
-    import subprocess
-
-    subprocess.run(
-        [
-            browser,
-            "--headless",
-            "--disable-gpu",
-            "--no-sandbox",
-            "--hide-scrollbars",
-            # draw every figure before the shot: on a loaded machine a shot without these
-            # once caught the page with a figure not yet painted (CI of eebbbee)
-            "--run-all-compositor-stages-before-draw",
-            "--virtual-time-budget=10000",
-            f"--screenshot={shot}",
-            "--window-size=1280,800",
-            (out / "report.html").as_uri(),
-        ],
-        check=True,
-        capture_output=True,
-        timeout=120,
-    )
-    img = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    img = _screenshot(browser, out / "report.html", tmp_path / "first.png", "1280,800")
+    img = img.astype(int)
     box = img[int(headline["top"]) : int(headline["bottom"]), int(headline["left"]) :]
     blue = np.abs(box - np.array([0x1F, 0x77, 0xB4])).sum(axis=2) < 60
     assert blue.sum() > 200, "the headline number is not drawn in its box"
