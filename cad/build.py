@@ -41,10 +41,11 @@ from cad.export import PartMesh, arrange_plates, export_3mf, export_step, export
 from cad.layout import ActuatorSpec
 from cad.meshing import tessellate
 from cad.mounting import MountingSpec, TrackingReport, build_mounting_pieces
-from cad.process import PrintProcess, get_process
+from cad.process import CadProcess, get_process
 from cad.render import render_all
 from cad.selflocking import SelfLocking
 from design.atomic import write_text
+from design.process import PrintProcess
 from design.records import Design
 from design.units import GRAM, MM3
 
@@ -131,7 +132,7 @@ class CadReport:
         }
 
 
-def part_meshes(assembly: RobotAssembly, process: PrintProcess) -> dict[str, PartMesh]:
+def part_meshes(assembly: RobotAssembly, process: CadProcess) -> dict[str, PartMesh]:
     """Tessellate every part once, at the process's export tolerance (print frame). [mm]"""
     out = {}
     for name, part in assembly.parts.items():
@@ -169,7 +170,7 @@ def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
 
 def _parts_table(
     assembly: RobotAssembly,
-    process_of: Callable[[str], PrintProcess],
+    process_of: Callable[[str], CadProcess],
     design: Design,
     meshes: dict[str, PartMesh],
 ) -> list[dict[str, object]]:
@@ -234,8 +235,9 @@ def build_parts(
     out_dir : Output directory (created); files in it are replaced atomically.
     process : ``"fdm"`` or ``"resin"``, or a :class:`~cad.process.PrintProcess`.
     tip_process : the process of the two tip pieces (the parts the model carries, whose
-        fits and walls set their size and mass); None: ``process``. ``ringpair study``
-        passes the design's own ``tip.mounting.process``.
+        fits and walls set their size and mass); None: the design's own ``tip.mounting``
+        (process, wall, fits, density: the pieces the model knows); another process
+        reprints them with its numbers (:func:`cad.mounting.tip_design`).
     mounting, actuator : Designer's choices for the tip pieces and the actuator.
     material_pair : Worm/wheel material pair for the self-locking check.
     render : Also write the PNG renders.
@@ -246,13 +248,13 @@ def build_parts(
         (a ValueError, :class:`~cad.errors.CadError`) for impossible dimensions.
     """
     proc = get_process(process)
-    tip = proc if tip_process is None else get_process(tip_process)
     out = Path(out_dir)
     report = CadReport(out_dir=out, process=proc.name)
     t0 = time.perf_counter()
 
     # All geometry first: impossible dimensions fail here, before anything is written.
-    pieces = build_mounting_pieces(design, tip, mounting)
+    pieces = build_mounting_pieces(design, tip_process, mounting)
+    tip = pieces.process
     act = build_actuator(design, proc, actuator, material_pair)
     assembly = build_assembly(design, act, pieces)
     out.mkdir(parents=True, exist_ok=True)
@@ -264,7 +266,7 @@ def build_parts(
     report.files += list(stl_paths.values())
     report.files.append(export_step(assembly, out / STEP_FILE))
 
-    def process_of(name: str) -> PrintProcess:
+    def process_of(name: str) -> CadProcess:
         return tip if name in TIP_PIECES else proc
 
     for each in {p.name: p for p in (proc, tip)}.values():  # one set of plates per printer

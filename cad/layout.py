@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from cad.errors import require
 from cad.gears import WormDrive, WormDriveSpec
-from cad.process import PrintProcess, mm
+from cad.process import CadProcess, mm
 from design.records import Design
 
 HEX_ENGAGEMENT_MM = 15.0
@@ -104,7 +104,7 @@ class ActuatorLayout:
 
     spec: ActuatorSpec
     drive: WormDrive
-    process: PrintProcess
+    process: CadProcess
     catheter_outer_mm: float
     wire_mm: float
     shaft_height: float
@@ -170,7 +170,7 @@ class ActuatorLayout:
 
 
 def actuator_layout(
-    design: Design, process: PrintProcess, spec: ActuatorSpec | None = None
+    design: Design, process: CadProcess, spec: ActuatorSpec | None = None
 ) -> ActuatorLayout:
     """Place every part of the actuator for ``design`` and ``process``.
 
