@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -44,6 +45,7 @@ from cad.mounting import MountingSpec, TrackingReport, build_mounting_pieces
 from cad.process import CadProcess, get_process
 from cad.render import render_all
 from cad.selflocking import SelfLocking
+from cad.stock import fasteners
 from design.atomic import write_text
 from design.process import PrintProcess
 from design.records import Design
@@ -176,8 +178,9 @@ def _parts_table(
 ) -> list[dict[str, object]]:
     """One dict per part: name, quantity, printed, material, volume_mm3 [mm^3], mass_g [g]
     (one piece, 4 significant digits; printed parts at the process material's density,
-    bought ones at the design's), size_mm (bounding box x, y, z of its exported mesh: OCC's
-    box of a curved solid can be loose by tenths of a mm) [mm], file, description."""
+    bought ones at the design's, screws nominal), size_mm (bounding box x, y, z of its
+    exported mesh: OCC's box of a curved solid can be loose by tenths of a mm) [mm], file,
+    description."""
     bought = _bought_materials(design)
     rows = []
     for name, part in assembly.parts.items():
@@ -199,7 +202,28 @@ def _parts_table(
                 "description": part.description,
             }
         )
+    for f in fasteners(assembly.actuator.layout):
+        head = max(f.head, f.diameter)
+        # nominal: the thread's shank and a head as tall as the thread is wide (ISO 4762)
+        volume = math.pi / 4 * (f.diameter**2 * f.length + f.head**2 * f.diameter)
+        rows.append(
+            {
+                "name": f.name,
+                "quantity": f.quantity,
+                "printed": False,
+                "material": f"steel, {f.standard}",
+                "volume_mm3": round(volume, 3),
+                "mass_g": float(f"{volume * MM3 * STEEL_DENSITY / GRAM:.4g}"),
+                "size_mm": [head, head, f.length + (f.diameter if f.head else 0.0)],
+                "file": "bought",
+                "description": f.where,
+            }
+        )
     return rows
+
+
+STEEL_DENSITY = 7850.0
+"""Density of the screws' steel, for their nominal mass. [kg/m^3]"""
 
 
 def _write_parts_csv(rows: list[dict[str, object]], path: Path) -> Path:
