@@ -481,7 +481,6 @@ def run_study(
                 out / "cad",
                 cad_process,
                 render=render,
-                tip_process=chosen.tip.mounting.process,
             )
         ),
         w,
