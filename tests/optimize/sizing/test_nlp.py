@@ -188,7 +188,7 @@ def test_pareto_values_span_the_free_bounds():
 
 
 def test_a_failing_start_does_not_stop_the_study(known_study, monkeypatch):
-    import optimize.sizing.nlp as nlp
+    import optimize.sizing.nlp.solve as nlp
 
     # A start that cannot be evaluated is rejected with its reason; the next one solves.
     result = optimize_design(known_study, starts=[{"external_distance": math.nan}, {}])
