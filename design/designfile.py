@@ -26,7 +26,7 @@ from design.geometry import (
     ring_centres,
     ring_clears_wire,
 )
-from design.mounting import DEFAULT_PROCESS, PROCESSES
+from design.process import DEFAULT_PROCESS, PROCESSES
 from design.records import Design, Environment, ExternalMagnet, Mounting, Robot, Tip, Tube
 from design.registry import PARAMETERS, file_unit
 from design.suggest import did_you_mean
@@ -262,7 +262,7 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
 
 def _mounting(doc: dict[str, Any]) -> Mounting:
     """The optional ``[tip.mounting]`` section: ``process`` (a name of
-    :data:`design.mounting.PROCESSES`, default resin) sets the defaults of the wall, fit,
+    :data:`design.process.PROCESSES`, default resin) sets the defaults of the wall, fit,
     clearance and density keys."""
     node = doc["tip"].get("mounting", {})
     if not isinstance(node, dict):

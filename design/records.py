@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from design.geometry import magnet_spacing
-from design.mounting import DEFAULT_PROCESS, PROCESSES
+from design.process import DEFAULT_PROCESS, PROCESSES
 
 Vector3 = tuple[float, float, float]
 
@@ -52,7 +52,7 @@ class Robot:
 class Mounting:
     """The printed mounting pieces of the tip (:mod:`design.mounting`).
 
-    process : How they are printed, a name of :data:`design.mounting.PROCESSES`; it sets
+    process : How they are printed, a name of :data:`design.process.PROCESSES`; it sets
         the defaults of the next four.
     wall : The pieces' structural wall. [m]
     fit_allowance : Diametral allowance of a glued seat (ring, catheter, wire). [m]
@@ -75,7 +75,7 @@ class Mounting:
 
     @classmethod
     def printed_by(cls, process: str, **values: float) -> Mounting:
-        """The pieces printed by ``process`` (:data:`design.mounting.PROCESSES`), its wall,
+        """The pieces printed by ``process`` (:data:`design.process.PROCESSES`), its wall,
         fit, clearance and density unless ``values`` give them."""
         p = PROCESSES[process]
         numbers = {

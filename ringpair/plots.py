@@ -26,8 +26,7 @@ from design.workspace import Workspace  # noqa: E402
 from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E402
 
 if TYPE_CHECKING:
-    from optimize.fitting.diagnose import Diagnosis
-    from optimize.fitting.diagnosis import Fit
+    from optimize.fitting.diagnose import Diagnosis, Fit
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.nlp import OptimizationResult
     from optimize.sizing.pareto import ParetoPoint, ParetoResult

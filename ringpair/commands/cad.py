@@ -32,7 +32,9 @@ from ringpair.options import (
     type=click.Choice(["fdm", "resin"]),
     default="fdm",
     show_default=True,
-    help="Printing process: sets fit allowances, clearances, minimum wall and build volume.",
+    help="Printing process of the actuator's parts: sets fit allowances, clearances, minimum "
+    "wall and build volume. The two tip pieces are printed as the design file's "
+    "[tip.mounting] says (resin by default), the pieces the model carries.",
 )
 @click.option("--no-render", is_flag=True, help="Skip the pyvista renders (faster).")
 def cad(design: Path | None, out: Path | None, process: str, no_render: bool) -> None:

@@ -19,7 +19,7 @@ from design.equilibrium import solve_sequence
 from design.geometry import WIRE_CLEARANCE, curve_disc_radius, external_distance
 from design.home import solve_home
 from design.model import RingPairModel
-from design.mounting import RESIN
+from design.process import RESIN
 from design.registry import parameter_vector
 from design.workspace import sweep_workspace
 from optimize.sizing.nlp import evaluate_design, optimize_design
