@@ -514,15 +514,35 @@ def steerable_workspace(design: Design, model: RingPairModel) -> tuple[Workspace
 def _forward_pair(start: Design, best: Design, model: RingPairModel) -> dict[str, Any]:
     """The forward stage: the start's and the recommended design's workspaces
     (``start``, ``best``) and controllable parts (``start_controllable``,
-    ``best_controllable``), :func:`steerable_workspace`."""
+    ``best_controllable``), :func:`steerable_workspace`; where ``model`` leaves torsion out,
+    the recommended design's with it (``best_torsion``: the disc, droop, share steerable
+    from home, snaps; the transmissions' twist with the printed pieces' stops and
+    pre-twist as the design file has them). [SI]"""
     ws_start, ctl_start = steerable_workspace(start, model)
     ws_best, ctl_best = steerable_workspace(best, model)
-    return {
+    out = {
         "start": ws_start,
         "best": ws_best,
         "start_controllable": ctl_start,
         "best_controllable": ctl_best,
     }
+    if "torsion" not in model.effects:
+        # what the model leaves out, measured on the recommended design
+        twisted = RingPairModel(model.effects | {"torsion"})
+        t0 = time.perf_counter()
+        ws_t, ctl_t = steerable_workspace(best, twisted)
+        out["best_torsion"] = {
+            "effects": sorted(twisted.effects),
+            "disc_radius": ctl_t.disc_radius,
+            "workspace_disc_radius": ws_t.disc_radius,
+            "droop": ws_t.droop,
+            "home_stable": ws_t.home.stable,
+            "controllable_fraction": ctl_t.fraction,
+            "snapped": ws_t.n_snapped,
+            "configurations": len(ws_t.grid),
+            "seconds": time.perf_counter() - t0,
+        }
+    return out
 
 
 CARRIED = (

@@ -186,7 +186,8 @@ def results(run: Run) -> dict[str, Any]:
         "pareto": front_notes(run),
         "forward": {"model": work_model}
         | _forward_numbers("start", start_ws, fwd["start_controllable"])
-        | _forward_numbers("best", best_ws, fwd["best_controllable"]),
+        | _forward_numbers("best", best_ws, fwd["best_controllable"])
+        | _torsion_numbers(fwd.get("best_torsion")),
         "tolerance": {
             "samples": int(len(tol)),
             "disc_radius_mean_mm": float(np.mean(tol)),
@@ -228,6 +229,42 @@ def _forward_numbers(which: str, ws: Any, ctl: Any) -> dict[str, Any]:
         f"{which}_straight_disc_radius_mm": ws.straight_disc_radius / MM,
         f"{which}_controllable_fraction": ctl.fraction,
     }
+
+
+def _torsion_numbers(t: dict[str, Any] | None) -> dict[str, Any]:
+    """The recommended design with torsion added to the model for design work (what that
+    model leaves out), in report units; empty where the model has torsion. [mm]"""
+    if t is None:
+        return {}
+    return {
+        "best_torsion": {
+            "effects": t["effects"],
+            "disc_radius_mm": t["disc_radius"] / MM,
+            "workspace_disc_radius_mm": t["workspace_disc_radius"] / MM,
+            "droop_mm": t["droop"] / MM,
+            "home_stable": t["home_stable"],
+            "controllable_fraction": t["controllable_fraction"],
+            "snapped": t["snapped"],
+            "configurations": t["configurations"],
+            "seconds": t["seconds"],
+        }
+    }
+
+
+def _left_out(f: dict[str, Any]) -> str:
+    """What the model for design work leaves out (torsion), and how much it moves the
+    recommended design's disc."""
+    t = f.get("best_torsion")
+    if t is None:
+        return ""
+    moved = t["disc_radius_mm"] - f["best_disc_radius_mm"]
+    return (
+        f"<br><b>Left out of the design model: torsion</b> (the transmissions' twist with "
+        f"the printed pieces' stops and pre-twist). With it the recommended design's disc "
+        f"is <b>{t['disc_radius_mm']:.2f} mm</b> ({moved:+.2f} mm), "
+        f"{100 * t['controllable_fraction']:.0f} % of the configurations steerable from home, "
+        f"{t['snapped']} of {t['configurations']} snapping, droop {t['droop_mm']:.1f} mm."
+    )
 
 
 def _question(run: Run, doc: dict[str, Any]) -> str:
@@ -301,6 +338,7 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
         f"{fs:.2f} mm: <b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>"
         + (f"; the study's NLP: {b:.2f} mm (start {s:.2f} mm)" if same else "")
         + _steerable(f)
+        + _left_out(f)
         + "</div>"
     ]
     if not same:

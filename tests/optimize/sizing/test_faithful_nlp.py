@@ -65,7 +65,7 @@ neutral_tolerance_mm = 200.0
 magnet_clearance_mm = 2.0
 [solver]
 starts = 1
-configurations = 16
+configurations = 24
 neutral_configurations = 4
 """
 
@@ -149,7 +149,8 @@ def test_faithful_optimum_loop_driven_finely_never_snaps(optima):
 
 
 def test_nlp_disc_about_home_is_the_forward_workspaces_the_one_disc(optima):
-    """Issue 49: the NLP's disc (about home, on its few samples of the loop) equals the disc
+    """Issue 49: the NLP's disc (about home, on the study's default 24 samples of the loop;
+    on 16, seed 13 differs by 0.11 mm) equals the disc
     ``ringpair workspace`` reports for the optimum (the forward sweep's 720-sample loop
     about the forward home, capped by what can be steered to from home on a 10-degree grid)
     within 0.1 mm; the cells steerable from home never cover a disc larger than the
