@@ -87,6 +87,7 @@ def workspace(
         folder=True,
         typed=out is not None,
         files=FILES,
+        inputs=[design],
     )
     with progress("sweeping the workspace"):
         ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
