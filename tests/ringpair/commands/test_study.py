@@ -60,7 +60,10 @@ def test_every_stage_runs_and_the_report_shows_the_json_numbers(study_run):
     # the disc (steerable from home without a snap) under its old name too (issue 49)
     f = doc["forward"]
     assert f["best_controllable_disc_radius_mm"] == f["best_disc_radius_mm"]
-    assert doc["forward"]["best_disc_radius_mm"] > doc["forward"]["start_disc_radius_mm"]
+    # the study's NLP improves its own disc; this study designs with another model than the
+    # forward check's, about whose home its optimum need not be better (issue 49)
+    assert doc["best"]["disc_radius_mm"] > doc["start"]["disc_radius_mm"]
+    assert f["best_droop_mm"] >= 0 and f["start_droop_mm"] >= 0
     assert doc["tolerance"]["samples"] == 20 and doc["tolerance"]["disc_radius_std_mm"] > 0
     assert {r["effect"] for r in doc["effects"]} >= {"torsion", "near_field", "all"}
     images = re.findall(r'src="data:image/png;base64,', page)
