@@ -24,11 +24,19 @@ from typing import Any
 import numpy as np
 
 from design.atomic import atomic_path, write_text
+from design.made import made_design
 from design.model import RingPairModel
 from design.registry import file_key, file_unit
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
-from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run, forward_model
+from ringpair.pipeline import (
+    BEST_DESIGN,
+    RELAX,
+    TOLERANCES,
+    Run,
+    forward_model,
+    rounding_note,
+)
 from ringpair.plots import (
     binding,
     plot_fronts,
@@ -189,6 +197,10 @@ def results(run: Run) -> dict[str, Any]:
             "best_disc_radius_mm": best_ws.disc_radius / MM,
             "start_controllable_disc_radius_mm": fwd["start_controllable"] / MM,
             "best_controllable_disc_radius_mm": fwd["best_controllable"] / MM,
+            "unrounded_disc_radius_mm": fwd["optimum"].disc_radius / MM
+            if "optimum" in fwd
+            else None,
+            "rounding": rounding_note(fwd),
         },
         "tolerance": {
             "samples": int(len(tol)),
@@ -283,7 +295,7 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
             f"the model for design work ({html.escape(f['model'])})<br>start {fs:.2f} mm: "
             f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>{_steerable(f)}</div>"
         )
-    d = run.results["optimise"].design
+    d = made_design(run.results["optimise"].design)  # the hand-off, as best_design.toml
     cat, wire = doc["materials"]
     dims = (
         f"catheter{' ' + cat if cat else ''} Ø{_mm(d.robot.catheter.outer_diameter)}/"
@@ -295,8 +307,9 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
     )
     cards.append(
         f"<div class=card><b>Recommended design</b>: {html.escape(dims)}. "
+        f"{html.escape(f['rounding'])} "
         f"Design file <code>{BEST_DESIGN}</code>; parts in <code>cad/</code> "
-        f"(<code>parts.csv</code>).</div>"
+        f"(<code>parts.csv</code>, <code>bom.csv</code>).</div>"
     )
     return f"<div class=cards>{''.join(cards)}</div>"
 

@@ -22,6 +22,7 @@ from cad.build import PARTS_COLUMNS
 from cad.checks import load_stl
 from cad.process import FDM, RESIN
 from design.designfile import design_to_dict, load_design
+from design.made import made_design
 from optimize.sizing.nlp import optimize_design, pareto_values
 from optimize.sizing.studyfile import load_study
 from ringpair import report_html
@@ -171,14 +172,22 @@ def _rows(path):
     return list(csv.DictReader(ln for ln in lines if not ln.startswith("#"))), notes
 
 
-def test_best_design_file_reads_back_as_the_optimum_and_simulates(study_run, tmp_path):
+def test_best_design_file_reads_back_as_the_rounded_optimum_and_simulates(study_run, tmp_path):
     path, out, first, _ = study_run
     assert first.exit_code == 0, first.output
     optimum = optimize_design(load_study(path)).design  # the same NLP, solved again here
     loaded = load_design(out / "best_design.toml")
-    want, got = _numbers(design_to_dict(optimum)), _numbers(design_to_dict(loaded))
+    # the optimum rounded to what can be made (design.made), every mounting choice stated
+    want = _numbers(design_to_dict(made_design(optimum), explicit=True))
+    got = _numbers(design_to_dict(loaded, explicit=True))
     assert got.keys() == want.keys()
     assert got == pytest.approx(want, rel=1e-9, abs=1e-12)
+    text = (out / "best_design.toml").read_text()
+    assert "[tip.mounting]" in text and "wall_mm" in text and "stop_angle_deg" in text
+    assert not re.search(r"_mm = \d+\.\d{6,}", text), text
+    doc = json.loads((out / "results.json").read_text())
+    assert "Sizes rounded to what can be made" in first.output
+    assert doc["forward"]["unrounded_disc_radius_mm"] > 0
     csv_out = tmp_path / "pose.csv"
     args = ["simulate", str(out / "best_design.toml"), "--theta1", "0,90", "--theta2", "0"]
     simulated = CliRunner().invoke(cli, [*args, "--out", str(csv_out)])
