@@ -599,6 +599,8 @@ def _cad_summary(report: Any) -> dict[str, Any]:
         "files": [str(p) for p in report.files],
         "checks": report.checks,
         "parts": report.parts,
+        "bom": report.bom,
+        "tip": report.tip,
         "passed": report.passed,
         "timings_s": report.timings_s,
     }

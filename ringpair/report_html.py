@@ -14,7 +14,6 @@ failed or tight ones expanded)."""
 from __future__ import annotations
 
 import html
-import json
 import re
 import shutil
 import subprocess
@@ -27,8 +26,10 @@ from design.atomic import atomic_path, write_text
 from design.made import made_design
 from design.model import RingPairModel
 from design.registry import file_key, file_unit
+from design.strict_json import dumps_strict
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
+from ringpair.parts_report import bom_section, tip_card
 from ringpair.pipeline import (
     BEST_DESIGN,
     RELAX,
@@ -311,6 +312,7 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
         f"Design file <code>{BEST_DESIGN}</code>; parts in <code>cad/</code> "
         f"(<code>parts.csv</code>, <code>bom.csv</code>).</div>"
     )
+    cards.append(tip_card(run.results.get("cad")))
     return f"<div class=cards>{''.join(cards)}</div>"
 
 
@@ -471,7 +473,8 @@ def _parts_section(run: Run) -> str:
 <p>{len(cad["checks"])} checks: {failed} failed; {len(shown)} shown below (failed, or within
 {TIGHT:.0%} of their limit).</p>
 {tight}
-{details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}"""
+{details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}
+{bom_section(cad)}"""
 
 
 def _cell(v: Any) -> str:
@@ -550,6 +553,7 @@ def write_report(run: Run) -> list[Path]:
 {_question(run, doc)}
 {_answer(run, doc)}
 {_limits(doc)}
+<!--pdf-->
 </section>
 <h2 id="setup">Set-up</h2>
 <p>{html.escape(intro)} The study optimised with the {html.escape(doc["model"])} model;
@@ -577,15 +581,33 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
 {table(["stage", "seconds"], timing_rows)}
 </body></html>
 """
-    write_text(out / "report.html", page)
-    write_text(out / "results.json", json.dumps(doc, indent=2, default=_json) + "\n")
+    write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(browser() is not None)))
+    write_text(out / "results.json", dumps_strict(doc))
     pdf = print_pdf(out / "report.html", out / "report.pdf")
+    if pdf is None and browser() is not None:  # Chromium is there but printed nothing
+        write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(True, failed=True)))
     return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
 
 
-def _json(value: Any) -> Any:
-    """numpy scalars as numbers, anything else as its string."""
-    return float(value) if isinstance(value, np.floating | np.integer) else str(value)
+PDF_MARK = "<!--pdf-->"
+"""Where the first screen says whether ``report.pdf`` was written."""
+
+
+def pdf_note(chromium: bool, failed: bool = False) -> str:
+    """The first screen's line on ``report.pdf``: nothing where Chromium prints it, else
+    why there is none and what to do."""
+    if chromium and not failed:
+        return ""
+    why = (
+        "headless Chromium failed to print it"
+        if failed
+        else "headless Chromium (Debian package <code>chromium</code>) is not installed"
+    )
+    return (
+        f"<p class=next id=pdf>No <code>report.pdf</code> was written: {why}. Print this "
+        "page from a browser, or install Chromium and run the study again (its stages are "
+        "reused).</p>"
+    )
 
 
 def browser() -> str | None:
