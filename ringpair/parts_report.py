@@ -12,6 +12,26 @@ from typing import Any
 
 from ringpair.html_page import table
 
+EFFECT_WORDS = {
+    "near_field": "exact ring field",
+    "large_deflection": "large deflection",
+    "torsion": "transmission twist",
+    "gravity": "gravity",
+    "printed_tip": "printed tip",
+    "hysteresis": "friction and backlash",
+}
+"""Each model effect (:data:`design.model.SWITCHES`) as a reader names it."""
+
+
+def model_title(effects: frozenset[str] | set[str]) -> str:
+    """A model as a reader names it: "the paper's baseline" or "baseline with" its effects
+    in words (:data:`EFFECT_WORDS`), in a fixed order."""
+    if not effects:
+        return "paper's baseline"
+    rank = {e: k for k, e in enumerate(EFFECT_WORDS)}
+    words = [EFFECT_WORDS.get(e, e) for e in sorted(effects, key=lambda e: (rank.get(e, 99), e))]
+    return "baseline with " + ", ".join(words)
+
 
 def _grams(x: Any) -> str:
     return "" if x is None or x == "" else f"{float(x):.3g}"

@@ -24,12 +24,11 @@ import numpy as np
 
 from design.atomic import atomic_path, write_text
 from design.made import made_design
-from design.model import RingPairModel
-from design.registry import file_key, file_unit
+from design.registry import PARAMETERS, file_key, file_unit
 from design.strict_json import dumps_strict
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
-from ringpair.parts_report import bom_section, tip_card
+from ringpair.parts_report import bom_section, model_title, tip_card
 from ringpair.pipeline import (
     BEST_DESIGN,
     RELAX,
@@ -83,9 +82,9 @@ def _mm(x: float) -> str:
 
 
 def model_names(run: Run) -> tuple[str, str]:
-    """The study's model and the model for design work, by name ('baseline' or the
-    effects joined by '+')."""
-    return RingPairModel(run.study.effects).name, forward_model(run.study).name
+    """The study's model and the model for design work, as a reader names them
+    (:func:`ringpair.parts_report.model_title`)."""
+    return model_title(run.study.effects), model_title(forward_model(run.study).effects)
 
 
 def front_notes(run: Run) -> dict[str, str]:
@@ -525,7 +524,10 @@ def write_report(run: Run) -> list[Path]:
     images = {p.stem: img(p, p.stem) for p in paths}
 
     t = doc["tolerance"]
-    tol_rows = [[k, f"{s:g}", kind] for k, (kind, s) in TOLERANCES.items()]
+    tol_rows = [
+        [PARAMETERS[k].meaning, tolerance_words(k, kind, sigma)]
+        for k, (kind, sigma) in TOLERANCES.items()
+    ]
     eff_rows = [
         [r["effect"], f"{r['max_shift_mm']:.2f}", f"{r['rms_shift_mm']:.2f}"]
         for r in doc["effects"]
@@ -571,7 +573,7 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
 {t["disc_radius_std_mm"]:.3f} mm standard deviation, 5-95 % range
 {t["disc_radius_p05_mm"]:.3f}-{t["disc_radius_p95_mm"]:.3f} mm.</p>
 {images["tolerance"]}
-{table(["parameter", "one sigma (SI or relative)", "kind"], tol_rows)}
+{table(["parameter", "one sigma"], tol_rows)}
 {_parts_section(run)}
 <h2 id="effects">Model effects (tip shift against the baseline, mm)</h2>
 {table(["effect", "max shift", "RMS shift"], eff_rows)}
@@ -587,6 +589,15 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
     if pdf is None and browser() is not None:  # Chromium is there but printed nothing
         write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(True, failed=True)))
     return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
+
+
+def tolerance_words(name: str, kind: str, sigma: float) -> str:
+    """One tolerance in the reader's units: a percentage, or the value in its file unit
+    (``± 0.02 mm``)."""
+    if kind == "rel":
+        return f"± {100 * sigma:.3g} %"
+    unit, scale = file_unit(name)
+    return f"± {sigma / scale:.3g} {unit}"
 
 
 PDF_MARK = "<!--pdf-->"

@@ -47,8 +47,7 @@ memory bound: rows go to the CSV chunk by chunk)."""
 @angle_option(
     "--theta2",
     "0",
-    "Proximal ring (catheter) angles [deg], same forms. Every pair of the two "
-    "lists is simulated.",
+    "Proximal ring (catheter) angles [deg], same forms. Every pair of the two lists is simulated.",
 )
 @path_option(
     "--out",
@@ -134,10 +133,7 @@ def simulate(
         shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
         _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)")
     if failures:
-        warn(
-            f"{failures.total()} configuration(s) have no state: "
-            + "; ".join(sorted(failures))
-        )
+        warn(f"{failures.total()} configuration(s) have no state: " + "; ".join(sorted(failures)))
     console.print(f"wrote {out} ({n} configurations)")
 
 

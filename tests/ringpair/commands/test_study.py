@@ -27,6 +27,7 @@ from optimize.sizing.nlp import optimize_design, pareto_values
 from optimize.sizing.studyfile import load_study
 from ringpair import report_html
 from ringpair.cli import cli
+from ringpair.parts_report import model_title
 
 
 @pytest.fixture(scope="module")
@@ -445,8 +446,9 @@ def test_report_names_the_model_of_each_number_and_collapses_passing_checks(stud
 
     path, out, _, _ = study_run
     page = (out / "report.html").read_text()
-    study_model = RingPairModel(load_study(path).effects).name
-    work_model = RingPairModel(DEFAULT_EFFECTS).name
+    study_model = model_title(load_study(path).effects)
+    work_model = model_title(RingPairModel(DEFAULT_EFFECTS).effects)
+    assert "+" not in work_model and "printed tip" in work_model  # words, not a log
     assert f"Model of the study: <b>{study_model}</b>" in page
     assert f"Workspaces ({work_model} model)" in page
     assert f"Pareto fronts ({study_model} model)" in page
