@@ -55,7 +55,7 @@ class Parameter:
     field : where it lives in a :class:`~design.records.Design`, a dotted path of record
         attributes with a component index for vectors (``"tip.gap"``,
         ``"external_magnet.center[0]"``); None for a factor of the model alone (always 1
-        in a design, freed by calibration).
+        in a design, freed by calibration) or an applied load (``default``, 0).
     unit : its SI unit.
     key : its design-file key, ``section.key`` (vectors: one key for three parameters).
     low, high, low_open : the range a design file admits, in file units (None: unbounded).
@@ -79,8 +79,8 @@ class Parameter:
 
     def value(self, design: Design) -> float:
         """Its value in ``design``. [unit]"""
-        if self.field is None:
-            return 1.0
+        if self.field is None:  # a model factor (1), or an applied load (its default, 0)
+            return 1.0 if self.default is None else self.default
         path, i = _split(self.field)
         node: Any = design
         for part in path:
@@ -353,7 +353,20 @@ _TABLE: list[Parameter] = [
         )
     ],
     Parameter("load_scale", "-", "multiplies every load (1 = physical; continuation)", None),
+    *[
+        Parameter(f"applied_{what}_{axis}", unit, f"{meaning}, {axis}", None, default=0.0)
+        for what, unit, meaning in (
+            ("force", "N", "force applied at the tracked point, base frame"),
+            ("moment", "N m", "moment applied about the tracked point, base frame"),
+        )
+        for axis in "xyz"
+    ],
 ]
+APPLIED_LOAD: tuple[str, ...] = tuple(
+    f"applied_{what}_{axis}" for what in ("force", "moment") for axis in "xyz"
+)
+"""An external wrench on the tip at the tracked point (0 in a design): the tip stiffness's
+derivative (:mod:`design.stiffness`), a contact force, a test's push. [N, N m]"""
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in _TABLE}
 NAMES: tuple[str, ...] = tuple(PARAMETERS)

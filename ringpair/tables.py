@@ -23,6 +23,7 @@ from design.geometry import rest_position
 from design.model import RingPairModel, available_effects
 from design.records import Design
 from design.registry import PARAMETERS, file_unit
+from design.stiffness import TipStiffness
 from design.units import MM, MM3
 
 if TYPE_CHECKING:
@@ -47,13 +48,22 @@ POSE_COLUMNS = (
     "snapped",
     "multistable",
     "failure",
+    "stiffness_min_mN_per_mm",
+    "stiffness_max_mN_per_mm",
 )
 
 
-def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
+def pose_rows(
+    eq: Equilibria, rest: np.ndarray, stiffness: TipStiffness | None = None
+) -> list[dict]:
     """One row per configuration: commanded and tip ring angles [deg], tip [mm], tangent,
-    deflection from ``rest`` [mm], flags, and why a row has no state (empty pose cells)."""
+    deflection from ``rest`` [mm], flags, why a row has no state (empty pose cells), and
+    the tip stiffness's smallest and largest finite principal values (N/m = mN/mm; empty
+    without ``stiffness``)."""
     rows = []
+    nan = np.full(len(eq), np.nan)
+    lowest = nan if stiffness is None else stiffness.lowest
+    highest = nan if stiffness is None else stiffness.highest
     commanded_deg = np.rad2deg(eq.command)
     tip_deg = np.rad2deg(eq.tip_angles)
     deflection = np.linalg.norm(eq.position - rest, axis=1) / MM
@@ -80,6 +90,8 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
                 "snapped": bool(eq.snapped[k]),
                 "multistable": bool(eq.multistable[k]),
                 "failure": str(eq.failure[k]) or ("" if posed else "no finite pose"),
+                "stiffness_min_mN_per_mm": float(lowest[k]),
+                "stiffness_max_mN_per_mm": float(highest[k]),
             }
         )
     return rows

@@ -48,7 +48,9 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
     """
     d = design_from(design)
     typed = out is not None
-    out = output_path(out or default_out(d.name, "cad"), "--out", folder=True, typed=typed)
+    out = output_path(
+        out or default_out(d.name, "cad"), "--out", folder=True, typed=typed, inputs=[design]
+    )
     from cad import CadError, build_parts  # after the inputs are checked: CAD loads slowly
 
     with progress("building, exporting, checking and rendering parts"), bad_input(CadError):

@@ -11,6 +11,7 @@ from rich.table import Table
 
 from design.equilibrium import solve_design
 from design.geometry import rest_position
+from design.stiffness import tip_stiffness
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -88,7 +89,10 @@ def simulate(
     theta2_deg, the tip ring angles, x_mm, y_mm, z_mm (tip, base frame), the tip tangent,
     deflection_mm (from the straight tip), converged, stable, snapped (the robot jumped to
     another branch on the way), multistable (another stable state exists at that command),
-    failure (why a row has no state; its pose cells are then empty and converged = false).
+    failure (why a row has no state; its pose cells are then empty and converged = false),
+    stiffness_min_mN_per_mm and stiffness_max_mN_per_mm (the tip's smallest and largest
+    principal stiffness at the tracked point, magnetic stiffness included; an inextensible
+    rod's axis, along which the model's tip does not give, is left out).
     """
     d = design_from(design)
     model = model_from(effects)
@@ -123,7 +127,7 @@ def simulate(
                 ordered,
                 multistable=not (ordered or no_multistable),
             )
-            rows = pose_rows(eq, rest)
+            rows = pose_rows(eq, rest, tip_stiffness(model, model.parameters(d), eq))
             put(rows)
             head += rows[: SHOWN - len(head)]
             tail.extend(rows)

@@ -31,6 +31,7 @@ from ringpair.options import (
     STUDY,
     UserError,
     bad_input,
+    base_file,
     console,
     default_out,
     err_console,
@@ -173,7 +174,12 @@ def study(
         raise UserError(f"--samples must be at least 2; got {samples}")
     process = _process(process)
     out = output_path(
-        out or default_out(s.name), "--out", folder=True, typed=out is not None, files=FILES
+        out or default_out(s.name),
+        "--out",
+        folder=True,
+        typed=out is not None,
+        files=FILES,
+        inputs=[study_path, base_file(s), data],
     )
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

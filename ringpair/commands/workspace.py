@@ -12,6 +12,7 @@ from design.atomic import write_text
 from design.controllable import Controllable, controllable_workspace
 from design.equilibrium import solve_design
 from design.records import Design
+from design.stiffness import tip_stiffness
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from ringpair.options import (
@@ -84,6 +85,7 @@ def workspace(
         folder=True,
         typed=out is not None,
         files=FILES,
+        inputs=[design],
     )
     with progress("sweeping the workspace"):
         ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
@@ -95,7 +97,7 @@ def workspace(
         )
     write_csv(
         out / "workspace.csv",
-        pose_rows(ws.grid, ws.rest_position),
+        pose_rows(ws.grid, ws.rest_position, tip_stiffness(model, model.parameters(d), ws.grid)),
         POSE_COLUMNS,
         header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
     )
