@@ -57,6 +57,7 @@ from design.registry import PARAMETERS, file_key, index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
+from ringpair.report_notes import rounding_note
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -575,20 +576,6 @@ def headline(run: Run) -> str:
         "for the starting "
         f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
         f"{rounding_note(fwd)} Design file: {run.out / BEST_DESIGN}{parts}."
-    )
-
-
-def rounding_note(forward: dict[str, Any]) -> str:
-    """What rounding the optimum to what can be made (:func:`design.made.made_design`)
-    changed: the disc radius of the rounded design (the hand-off) against the optimiser's
-    unrounded numbers, under the model for design work. [mm]"""
-    if "optimum" not in forward:
-        return ""
-    made, raw = forward["best"].disc_radius / MM, forward["optimum"].disc_radius / MM
-    return (
-        f"Sizes rounded to what can be made and bought: disc radius {made:.3f} mm, against "
-        f"{raw:.3f} mm at the optimiser's unrounded numbers ({made - raw:+.3f} mm, "
-        f"{100 * (made / raw - 1):+.1f} %)."
     )
 
 

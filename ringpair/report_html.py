@@ -35,7 +35,6 @@ from ringpair.pipeline import (
     TOLERANCES,
     Run,
     forward_model,
-    rounding_note,
 )
 from ringpair.plots import (
     binding,
@@ -44,6 +43,7 @@ from ringpair.plots import (
     plot_tolerance,
     plot_workspaces,
 )
+from ringpair.report_notes import PDF_MARK, pdf_note, rounding_note, tolerance_words
 from ringpair.tables import (
     PARETO_UNITS,
     TIGHT,
@@ -589,36 +589,6 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
     if pdf is None and browser() is not None:  # Chromium is there but printed nothing
         write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(True, failed=True)))
     return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
-
-
-def tolerance_words(name: str, kind: str, sigma: float) -> str:
-    """One tolerance in the reader's units: a percentage, or the value in its file unit
-    (``± 0.02 mm``)."""
-    if kind == "rel":
-        return f"± {100 * sigma:.3g} %"
-    unit, scale = file_unit(name)
-    return f"± {sigma / scale:.3g} {unit}"
-
-
-PDF_MARK = "<!--pdf-->"
-"""Where the first screen says whether ``report.pdf`` was written."""
-
-
-def pdf_note(chromium: bool, failed: bool = False) -> str:
-    """The first screen's line on ``report.pdf``: nothing where Chromium prints it, else
-    why there is none and what to do."""
-    if chromium and not failed:
-        return ""
-    why = (
-        "headless Chromium failed to print it"
-        if failed
-        else "headless Chromium (Debian package <code>chromium</code>) is not installed"
-    )
-    return (
-        f"<p class=next id=pdf>No <code>report.pdf</code> was written: {why}. Print this "
-        "page from a browser, or install Chromium and run the study again (its stages are "
-        "reused).</p>"
-    )
 
 
 def browser() -> str | None:
