@@ -87,6 +87,6 @@ FDM = PrintProcess(
     # a vertical hole's polygon and the squeezed first perimeter: about 0.2 mm undersize
     hole_shrink=0.2 * MM,
 )
-PROCESSES: dict[str, PrintProcess] = {p.name: p for p in (FDM, RESIN)}
+PROCESSES: dict[str, PrintProcess] = {p.name: p for p in (RESIN, FDM)}
 """The print processes by name; the tip pieces default to resin (the finest)."""
 DEFAULT_PROCESS = "resin"
