@@ -24,10 +24,10 @@ EFFECT_WORDS = {
 
 
 def model_title(effects: frozenset[str] | set[str]) -> str:
-    """A model as a reader names it: "the paper's baseline" or "baseline with" its effects
+    """A model as a reader names it: "baseline (as in the paper)" or "baseline with" its effects
     in words (:data:`EFFECT_WORDS`), in a fixed order."""
     if not effects:
-        return "paper's baseline"
+        return "baseline (as in the paper)"
     rank = {e: k for k, e in enumerate(EFFECT_WORDS)}
     words = [EFFECT_WORDS.get(e, e) for e in sorted(effects, key=lambda e: (rank.get(e, 99), e))]
     return "baseline with " + ", ".join(words)

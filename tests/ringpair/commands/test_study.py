@@ -453,9 +453,9 @@ def test_report_names_the_model_of_each_number_and_collapses_passing_checks(stud
     study_model = model_title(load_study(path).effects)
     work_model = model_title(RingPairModel(DEFAULT_EFFECTS).effects)
     assert "+" not in work_model and "printed tip" in work_model  # words, not a log
-    assert f"Model of the study: <b>{study_model}</b>" in page
-    assert f"Workspaces ({work_model} model)" in page
-    assert f"Pareto fronts ({study_model} model)" in page
+    assert f"Model of the study: <b>{html.escape(study_model)}</b>" in page
+    assert f"Workspaces ({html.escape(work_model)} model)" in page
+    assert f"Pareto fronts ({html.escape(study_model)} model)" in page
     checks = json.loads((out / "results.json").read_text())["cad"]["checks"]
     shown = re.search(r"(\d+) checks: (\d+) failed; (\d+) shown below", page)
     hidden = re.search(r"<summary>the other (\d+) checks, all passed</summary>", page)
