@@ -134,10 +134,34 @@ class ExternalMagnet:
 
 
 @dataclass(frozen=True)
+class Obstacle:
+    """One rigid obstacle, base frame (:mod:`design.obstacles`).
+
+    kind : 'plane', 'sphere' or 'lumen'.
+    point : plane: a point on it; sphere: its centre; lumen: a point on its axis. [m]
+    normal : plane: the outward unit normal (the robot's side); lumen: the unit axis;
+        sphere: (0, 0, 0). [-]
+    radius : sphere, lumen (0 for a plane). [m]
+    friction : Coulomb coefficient (0: frictionless). [-]
+    """
+
+    kind: str
+    point: Vector3
+    normal: Vector3 = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    friction: float = 0.0
+
+
+@dataclass(frozen=True)
 class Environment:
-    """Optional surroundings. gravity : acceleration of gravity, base frame, or None. [m/s^2]"""
+    """Optional surroundings.
+
+    gravity : acceleration of gravity, base frame, or None. [m/s^2]
+    obstacles : rigid obstacles the tip may press on (none by default).
+    """
 
     gravity: Vector3 | None = None
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 @dataclass(frozen=True)

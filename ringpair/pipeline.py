@@ -421,7 +421,7 @@ def run_study(
     what = "optimisation (IPOPT, multi-start)"
     best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
-        raise StageError("optimise", "the study is infeasible: " + best.report())
+        raise StageError("optimise", "the study is infeasible: " + best.report(), run)
     # The hand-off: the optimum rounded to what can be made (design.made); the forward
     # stage re-runs the model on it and on the raw optimum, and the report states the change.
     chosen: Design = made_design(best.design)
@@ -615,10 +615,17 @@ def _diagnose(data: Path) -> dict[str, Any]:
 
 
 def write_manifest(
-    run: Run, study_path: Path | None, data: Path | None, seed: int, failed: str = ""
+    run: Run,
+    study_path: Path | None,
+    data: Path | None,
+    seed: int,
+    failed: str = "",
+    folder: dict[str, Any] | None = None,
 ) -> Path:
     """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file
-    (and the stage that failed, if one did: the files listed are those still valid)."""
+    (and the stage that failed, if one did: the files listed are those still valid);
+    ``folder``: what :mod:`ringpair.runs` says of the run's folder (an interrupted earlier
+    run, the stale files removed), under ``run``."""
     inputs: dict[str, Any] = {
         "study": {
             "path": str(study_path) if study_path else "embedded default study",
@@ -630,7 +637,10 @@ def write_manifest(
     files = sorted(
         p
         for p in run.out.rglob("*")
-        if p.is_file() and ".stages" not in p.parts and p.name != "manifest.json"
+        if p.is_file()
+        and ".stages" not in p.parts
+        and p.name != "manifest.json"
+        and not p.name.startswith(".ringpair")
     )
     doc = {
         "study": run.study.name,
@@ -638,6 +648,7 @@ def write_manifest(
         "versions": versions(),
         "seeds": {"tolerance": seed, "study": run.study.seed},
         "failed_stage": failed or None,
+        "run": folder or {},
         "stages": {
             name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
         },
