@@ -81,8 +81,9 @@ source present or, in a third of the draws, of no strength."""
 
 def draw_sources(design: Design, rng) -> tuple[Source, ...]:
     """One source of each kind of :data:`LAYOUT` around the tip of the straight robot,
-    each giving about 2-30 mT there or nothing (the external magnet is the cylinder): block
-    and spherical magnets 50-150 mm from the tip, a coil of 30-100 mm radius 40-150 mm away, a uniform field."""
+    each giving about 2-30 mT there or nothing (the external magnet is the cylinder):
+    block and spherical magnets 50-150 mm from the tip, a coil of 30-100 mm radius
+    40-150 mm away, a uniform field."""
     tip = np.array([design.robot.free_length, 0.0, 0.0])
 
     def unit():
