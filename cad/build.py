@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -41,10 +42,12 @@ from cad.export import PartMesh, arrange_plates, export_3mf, export_step, export
 from cad.layout import ActuatorSpec
 from cad.meshing import tessellate
 from cad.mounting import MountingSpec, TrackingReport, build_mounting_pieces
-from cad.process import PrintProcess, get_process
+from cad.process import CadProcess, get_process
 from cad.render import render_all
 from cad.selflocking import SelfLocking
+from cad.stock import fasteners
 from design.atomic import write_text
+from design.process import PrintProcess
 from design.records import Design
 from design.units import GRAM, MM3
 
@@ -131,7 +134,7 @@ class CadReport:
         }
 
 
-def part_meshes(assembly: RobotAssembly, process: PrintProcess) -> dict[str, PartMesh]:
+def part_meshes(assembly: RobotAssembly, process: CadProcess) -> dict[str, PartMesh]:
     """Tessellate every part once, at the process's export tolerance (print frame). [mm]"""
     out = {}
     for name, part in assembly.parts.items():
@@ -169,14 +172,15 @@ def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
 
 def _parts_table(
     assembly: RobotAssembly,
-    process_of: Callable[[str], PrintProcess],
+    process_of: Callable[[str], CadProcess],
     design: Design,
     meshes: dict[str, PartMesh],
 ) -> list[dict[str, object]]:
     """One dict per part: name, quantity, printed, material, volume_mm3 [mm^3], mass_g [g]
     (one piece, 4 significant digits; printed parts at the process material's density,
-    bought ones at the design's), size_mm (bounding box x, y, z of its exported mesh: OCC's
-    box of a curved solid can be loose by tenths of a mm) [mm], file, description."""
+    bought ones at the design's, screws nominal), size_mm (bounding box x, y, z of its
+    exported mesh: OCC's box of a curved solid can be loose by tenths of a mm) [mm], file,
+    description."""
     bought = _bought_materials(design)
     rows = []
     for name, part in assembly.parts.items():
@@ -198,7 +202,28 @@ def _parts_table(
                 "description": part.description,
             }
         )
+    for f in fasteners(assembly.actuator.layout):
+        head = max(f.head, f.diameter)
+        # nominal: the thread's shank and a head as tall as the thread is wide (ISO 4762)
+        volume = math.pi / 4 * (f.diameter**2 * f.length + f.head**2 * f.diameter)
+        rows.append(
+            {
+                "name": f.name,
+                "quantity": f.quantity,
+                "printed": False,
+                "material": f"steel, {f.standard}",
+                "volume_mm3": round(volume, 3),
+                "mass_g": float(f"{volume * MM3 * STEEL_DENSITY / GRAM:.4g}"),
+                "size_mm": [head, head, f.length + (f.diameter if f.head else 0.0)],
+                "file": "bought",
+                "description": f.where,
+            }
+        )
     return rows
+
+
+STEEL_DENSITY = 7850.0
+"""Density of the screws' steel, for their nominal mass. [kg/m^3]"""
 
 
 def _write_parts_csv(rows: list[dict[str, object]], path: Path) -> Path:
@@ -234,8 +259,9 @@ def build_parts(
     out_dir : Output directory (created); files in it are replaced atomically.
     process : ``"fdm"`` or ``"resin"``, or a :class:`~cad.process.PrintProcess`.
     tip_process : the process of the two tip pieces (the parts the model carries, whose
-        fits and walls set their size and mass); None: ``process``. ``ringpair study``
-        passes the design's own ``tip.mounting.process``.
+        fits and walls set their size and mass); None: the design's own ``tip.mounting``
+        (process, wall, fits, density: the pieces the model knows); another process
+        reprints them with its numbers (:func:`cad.mounting.tip_design`).
     mounting, actuator : Designer's choices for the tip pieces and the actuator.
     material_pair : Worm/wheel material pair for the self-locking check.
     render : Also write the PNG renders.
@@ -246,13 +272,13 @@ def build_parts(
         (a ValueError, :class:`~cad.errors.CadError`) for impossible dimensions.
     """
     proc = get_process(process)
-    tip = proc if tip_process is None else get_process(tip_process)
     out = Path(out_dir)
     report = CadReport(out_dir=out, process=proc.name)
     t0 = time.perf_counter()
 
     # All geometry first: impossible dimensions fail here, before anything is written.
-    pieces = build_mounting_pieces(design, tip, mounting)
+    pieces = build_mounting_pieces(design, tip_process, mounting)
+    tip = pieces.process
     act = build_actuator(design, proc, actuator, material_pair)
     assembly = build_assembly(design, act, pieces)
     out.mkdir(parents=True, exist_ok=True)
@@ -264,7 +290,7 @@ def build_parts(
     report.files += list(stl_paths.values())
     report.files.append(export_step(assembly, out / STEP_FILE))
 
-    def process_of(name: str) -> PrintProcess:
+    def process_of(name: str) -> CadProcess:
         return tip if name in TIP_PIECES else proc
 
     for each in {p.name: p for p in (proc, tip)}.values():  # one set of plates per printer

@@ -20,7 +20,7 @@ import trimesh
 
 from cad.assembly import RobotAssembly
 from cad.errors import CadError
-from cad.process import PrintProcess
+from cad.process import CadProcess
 from design.atomic import atomic_path
 
 PLATE_SPACING_MM = 6.0
@@ -66,7 +66,7 @@ class PlateItem:
     offset: tuple[float, float, float]
 
 
-def arrange_plates(meshes: list[PartMesh], process: PrintProcess) -> list[list[PlateItem]]:
+def arrange_plates(meshes: list[PartMesh], process: CadProcess) -> list[list[PlateItem]]:
     """Shelf-pack every copy of every part onto as few plates as the build area needs.
 
     Parts keep their print orientation; each footprint is its bounding rectangle plus

@@ -419,7 +419,7 @@ def run_study(
     what = "optimisation (IPOPT, multi-start)"
     best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
-        raise StageError("optimise", "the study is infeasible: " + best.report())
+        raise StageError("optimise", "the study is infeasible: " + best.report(), run)
     chosen: Design = best.design
     what = f"what each limit costs (each moved by {RELAX:.0%}, the NLP solved again)"
     _stage(run, "sensitivity", what, key, lambda: sensitivity(study, best), w)
@@ -481,7 +481,6 @@ def run_study(
                 out / "cad",
                 cad_process,
                 render=render,
-                tip_process=chosen.tip.mounting.process,
             )
         ),
         w,
@@ -609,10 +608,17 @@ def _diagnose(data: Path) -> dict[str, Any]:
 
 
 def write_manifest(
-    run: Run, study_path: Path | None, data: Path | None, seed: int, failed: str = ""
+    run: Run,
+    study_path: Path | None,
+    data: Path | None,
+    seed: int,
+    failed: str = "",
+    folder: dict[str, Any] | None = None,
 ) -> Path:
     """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file
-    (and the stage that failed, if one did: the files listed are those still valid)."""
+    (and the stage that failed, if one did: the files listed are those still valid);
+    ``folder``: what :mod:`ringpair.runs` says of the run's folder (an interrupted earlier
+    run, the stale files removed), under ``run``."""
     inputs: dict[str, Any] = {
         "study": {
             "path": str(study_path) if study_path else "embedded default study",
@@ -624,7 +630,10 @@ def write_manifest(
     files = sorted(
         p
         for p in run.out.rglob("*")
-        if p.is_file() and ".stages" not in p.parts and p.name != "manifest.json"
+        if p.is_file()
+        and ".stages" not in p.parts
+        and p.name != "manifest.json"
+        and not p.name.startswith(".ringpair")
     )
     doc = {
         "study": run.study.name,
@@ -632,6 +641,7 @@ def write_manifest(
         "versions": versions(),
         "seeds": {"tolerance": seed, "study": run.study.seed},
         "failed_stage": failed or None,
+        "run": folder or {},
         "stages": {
             name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
         },

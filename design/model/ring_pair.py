@@ -228,6 +228,8 @@ class RingPairModel:
             force, torque = tip_wrench(
                 field_model, tracked, frame, tip_angles, moment, s.magnet_spacing
             )
+            force = force + load * s.applied_force  # (an external wrench, 0 in a design)
+            torque = torque + load * s.applied_moment
             if printed:
                 torque = torque + offset * ca.cross(tangent, force)
             if "gravity" in effects:

@@ -67,6 +67,8 @@ class Symbols(dict):
             s["external_diameter"], s["external_length"], s["external_remanence"]
         )
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
+        self.applied_force = ca.vertcat(*(s[f"applied_force_{a}"] for a in "xyz"))
+        self.applied_moment = ca.vertcat(*(s[f"applied_moment_{a}"] for a in "xyz"))
         self.tip = tip_geometry(
             s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"],
             s["magnet_gap"], s["catheter_outer_diameter"], s["wire_outer_diameter"],

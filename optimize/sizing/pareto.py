@@ -17,6 +17,7 @@ SI units are used for all inputs and outputs.
 from __future__ import annotations
 
 import logging
+import os
 import time
 import warnings
 from collections.abc import Callable
@@ -26,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from design import stored
+from design.processes import die_with_parent
 from optimize.sizing.nlp import OptimizationResult, optimize_design, pareto_values
 from optimize.sizing.studyfile import Study
 
@@ -175,6 +177,8 @@ def run_sweeps(
         try:
             with Client(cluster if cluster is not None else scheduler) as client:
                 used = len(client.scheduler_info()["workers"])
+                if cluster is not None:  # our workers die with this process (kill -9)
+                    client.run(die_with_parent, os.getpid())
                 futures = {
                     client.submit(_solve_point, study, a, e, pure=False): (a, e, p)
                     for a, e, p in todo
