@@ -71,7 +71,8 @@ def test_uniform_field_along_the_robot_bends_the_linear_cantilever_as_in_closed_
         e = total / size if size > 0 else np.zeros(3)
         expected = np.array([length, 0, 0]) - length / 2 * phi * e
         assert eq.stable[k]
-        np.testing.assert_allclose(eq.position[k], expected, rtol=0, atol=1e-9 * length)  # (the solver converges to ~1e-10)
+        # (the solver converges to ~1e-10 of the length)
+        np.testing.assert_allclose(eq.position[k], expected, rtol=0, atol=1e-9 * length)
 
 
 LAYOUT = ("uniform", "cuboid", "sphere", "coil")
