@@ -14,14 +14,6 @@ from design.units import MM
 from ringpair.options import DESIGN, FORCE, console, design_from, output_path, path_option
 
 
-@click.command()
-@DESIGN
-@path_option(
-    "--save",
-    help="Also write the (validated) design to this TOML file, e.g. to start a new one. "
-    "An existing file is replaced only with --force.",
-)
-@FORCE
 def _source_words(source) -> str:
     """One line of a field source's numbers, in file units."""
     from design.fields.sources import KINDS
@@ -40,6 +32,14 @@ def _source_words(source) -> str:
     return f"{source.kind}: " + ", ".join(parts)
 
 
+@click.command()
+@DESIGN
+@path_option(
+    "--save",
+    help="Also write the (validated) design to this TOML file, e.g. to start a new one. "
+    "An existing file is replaced only with --force.",
+)
+@FORCE
 def show(design: Path | None, save: Path | None, force: bool) -> None:
     """Validate DESIGN and print it with its derived quantities."""
     d = design_from(design)
