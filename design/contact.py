@@ -30,11 +30,11 @@ from numpy.typing import ArrayLike
 
 from design.equilibrium import Equilibria, solve_equilibria
 from design.equilibrium.newton import _check, _Checks, _newton
-from design.model import RingPairModel
-from design.obstacles import TipBody, gaps
-from design.records import Obstacle
+from design.model import PRINTED_TIP, RingPairModel
+from design.obstacles import TipBody, gaps, tip_body
+from design.records import Design, Obstacle
 from design.registry import index
-from design.stiffness import tip_stiffness
+from design.stiffness import TipStiffness, tip_stiffness
 
 CONTACT_TOLERANCE = 1e-9
 """|gap| below this is contact; a gap above -this is outside. [m]"""
@@ -155,6 +155,26 @@ def solve_in_contact(
     contact.normal[pressed] = -force / np.where(lam > 0, lam, np.nan)[:, None] * nan[:, None]
     contact.params[:, pressed] = p
     return Equilibria(**fields), contact
+
+
+def solve_design_in_contact(
+    design: Design,
+    model: RingPairModel,
+    theta1: ArrayLike,
+    theta2: ArrayLike,
+    *,
+    multistable: bool = False,
+) -> tuple[Equilibria, TipStiffness, Contact]:
+    """The states of ``design`` for commanded angles [rad] with its obstacles
+    (``environment.obstacles``; none: the free states), their tip stiffness (held on the
+    obstacle where the tip presses on one) and their contact."""
+    params = model.parameters(design)
+    body = tip_body(design, printed=PRINTED_TIP in model.effects)
+    obstacles = list(design.environment.obstacles)
+    eq, contact = solve_in_contact(
+        model, params, theta1, theta2, obstacles, body, multistable=multistable
+    )
+    return eq, tip_stiffness(model, contact.params, eq, held=contact.normal), contact
 
 
 def _press(

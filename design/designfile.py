@@ -549,9 +549,12 @@ def _file_units(x: float, scale: float) -> float:
     return x if scale == 1.0 else float(f"{x / scale:.12g}")
 
 
-def design_to_dict(design: Design) -> dict[str, Any]:
+def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
     """The design-file document (file units) of a :class:`Design`: every key of
-    :data:`SECTIONS`, optional keys only where they differ from their default."""
+    :data:`SECTIONS`, optional keys only where they differ from their default; with
+    ``explicit``, the ``[tip.mounting]`` section in full (process, wall, fits, density,
+    stops, pre-twist: a hand-off that does not lean on defaults a later version may
+    change)."""
     doc: dict[str, Any] = {"name": design.name}
     if design.description:
         doc["description"] = design.description
@@ -561,7 +564,7 @@ def design_to_dict(design: Design) -> dict[str, Any]:
         doc["external_magnet"] = {"shape": design.external_magnet.shape}
     mounting = design.tip.mounting
     defaults = Mounting.printed_by(mounting.process)
-    if mounting.process != DEFAULT_PROCESS:
+    if explicit or mounting.process != DEFAULT_PROCESS:
         doc["tip"]["mounting"] = {"process": mounting.process}
     for p in PARAMETERS.values():
         if p.key is None or p.field is None:
@@ -575,6 +578,8 @@ def design_to_dict(design: Design) -> dict[str, Any]:
         default = p.default
         if section == "tip.mounting":  # the process's value
             default = p.value(replace(design, tip=replace(design.tip, mounting=defaults)))
+            if explicit:
+                default = None
         if "[" not in p.field and default is not None and value == default:
             continue
         node = doc
@@ -622,11 +627,11 @@ def _sources_to_list(design: Design) -> list[dict[str, Any]]:
     return out
 
 
-def dumps_design(design: Design) -> str:
-    """Design-file text of a :class:`Design`."""
-    return tomli_w.dumps(design_to_dict(design))
+def dumps_design(design: Design, explicit: bool = False) -> str:
+    """Design-file text of a :class:`Design` (``explicit``: :func:`design_to_dict`)."""
+    return tomli_w.dumps(design_to_dict(design, explicit))
 
 
-def save_design(design: Design, path: str | os.PathLike[str]) -> None:
-    """Write a design file atomically."""
-    write_text(path, dumps_design(design))
+def save_design(design: Design, path: str | os.PathLike[str], explicit: bool = False) -> None:
+    """Write a design file atomically (``explicit``: :func:`design_to_dict`)."""
+    write_text(path, dumps_design(design, explicit))

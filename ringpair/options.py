@@ -18,7 +18,6 @@ it proves are ringpair's (:mod:`design.atomic`).
 from __future__ import annotations
 
 import json
-import math
 import os
 import re
 import stat
@@ -45,6 +44,7 @@ from design.atomic import remove_stale_temporaries
 from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, SWITCHES, RingPairModel, parse_effects
 from design.records import Design
+from design.strict_json import strict
 from ringpair.angles import parse_angles
 
 if TYPE_CHECKING:
@@ -184,17 +184,7 @@ MAX_CONFIGS = click.option(
 def json_text(doc: object) -> str:
     """``doc`` as strict JSON text, indented, with a final newline; NaN and infinities,
     which JSON does not have, become null."""
-    return json.dumps(_strict(doc), indent=2, allow_nan=False) + "\n"
-
-
-def _strict(x: object) -> object:
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _strict(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_strict(v) for v in x]
-    return x
+    return json.dumps(strict(doc)[0], indent=2, allow_nan=False) + "\n"
 
 
 def slug(name: str) -> str:

@@ -50,12 +50,14 @@ from design.atomic import write_text
 from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
+from design.made import made_design
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, file_key, index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
+from ringpair.report_notes import rounding_note
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -420,10 +422,12 @@ def run_study(
     best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
         raise StageError("optimise", "the study is infeasible: " + best.report(), run)
-    chosen: Design = best.design
+    # The hand-off: the optimum rounded to what can be made (design.made); the forward
+    # stage re-runs the model on it and on the raw optimum, and the report states the change.
+    chosen: Design = made_design(best.design)
     what = f"what each limit costs (each moved by {RELAX:.0%}, the NLP solved again)"
     _stage(run, "sensitivity", what, key, lambda: sensitivity(study, best), w)
-    save_design(chosen, out / BEST_DESIGN)
+    save_design(chosen, out / BEST_DESIGN, explicit=True)
     run.handoff.append(out / BEST_DESIGN)
     if study.pareto:
         pareto = _stage(
@@ -446,6 +450,7 @@ def run_study(
         lambda: {
             "start": sweep_workspace(study.base, model=faithful),
             "best": sweep_workspace(chosen, model=faithful),
+            "optimum": sweep_workspace(best.design, model=faithful),
             "start_controllable": steerable_disc(study.base, faithful),
             "best_controllable": steerable_disc(chosen, faithful),
         },
@@ -570,7 +575,7 @@ def headline(run: Run) -> str:
         f"({', '.join(sorted(forward_model(run.study).effects))}), against {start:.2f} mm "
         "for the starting "
         f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
-        f"Design file: {run.out / BEST_DESIGN}{parts}."
+        f"{rounding_note(fwd)} Design file: {run.out / BEST_DESIGN}{parts}."
     )
 
 
@@ -581,6 +586,8 @@ def _cad_summary(report: Any) -> dict[str, Any]:
         "files": [str(p) for p in report.files],
         "checks": report.checks,
         "parts": report.parts,
+        "bom": report.bom,
+        "tip": report.tip,
         "passed": report.passed,
         "timings_s": report.timings_s,
     }

@@ -252,6 +252,20 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     _save(fig, path)
 
 
+def plot_force_map(grid_deg: np.ndarray, force_mn: np.ndarray, path: Path, title: str) -> None:
+    """The magnitude of the force the tip exerts on the obstacles [mN] over (theta1 rows,
+    theta2 columns) [deg]; blank where the tip does not press."""
+    fig, ax = plt.subplots(figsize=(6.0, 5.0))
+    shown = np.ma.masked_invalid(force_mn.T)
+    mesh = ax.pcolormesh(grid_deg, grid_deg, shown, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label="force on the obstacle [mN]")
+    ax.set_xlabel("theta1 (distal ring) [deg]")
+    ax.set_ylabel("theta2 (proximal ring) [deg]")
+    ax.set_title(title + "\n(blank: no contact)", fontsize=9)
+    ax.set_aspect("equal")
+    _save(fig, path)
+
+
 def write_workspace_plots(
     ws: Workspace, sweep: Equilibria, design: Design, out_dir: str | os.PathLike[str]
 ) -> list[Path]:

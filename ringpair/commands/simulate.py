@@ -9,11 +9,10 @@ import click
 import numpy as np
 from rich.table import Table
 
-from design.contact import Contact, solve_in_contact
+from design.contact import Contact, solve_design_in_contact
 from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
-from design.model import PRINTED_TIP, RingPairModel
-from design.obstacles import tip_body
+from design.model import RingPairModel
 from design.records import Design
 from design.stiffness import TipStiffness, tip_stiffness
 from ringpair.options import (
@@ -149,18 +148,10 @@ def _states(
 ) -> tuple[Equilibria, TipStiffness, Contact | None]:
     """The states of the configurations ``chunk`` (M, 2) [rad], their tip stiffness and,
     with the design's obstacles, their contact (the stiffness then held on the obstacle)."""
-    params = model.parameters(d)
-    if not d.environment.obstacles:
-        eq = solve_design(
-            d, chunk[:, 0], chunk[:, 1], model, ordered, multistable=multistable and not ordered
-        )
-        return eq, tip_stiffness(model, params, eq), None
-    body = tip_body(d, printed=PRINTED_TIP in model.effects)
-    obstacles = list(d.environment.obstacles)
-    eq, contact = solve_in_contact(
-        model, params, chunk[:, 0], chunk[:, 1], obstacles, body, multistable=multistable
-    )
-    return eq, tip_stiffness(model, contact.params, eq, held=contact.normal), contact
+    if ordered:
+        eq = solve_design(d, chunk[:, 0], chunk[:, 1], model, ordered=True)
+        return eq, tip_stiffness(model, model.parameters(d), eq), None
+    return solve_design_in_contact(d, model, chunk[:, 0], chunk[:, 1], multistable=multistable)
 
 
 def _print_rows(shown: list[dict], n: int, title: str) -> None:
