@@ -49,6 +49,8 @@ def _save(fig: plt.Figure, path: Path, dpi: int = 130) -> None:
 def _magnet_outline(ax: plt.Axes, design: Design, axes: tuple[int, int]) -> None:
     """Outline of the external cylinder projected on a base-frame plane (axis along x/y/z)."""
     ext = design.external_magnet
+    if ext is None:
+        return
     axis = np.abs(np.asarray(ext.magnetization))
     half = np.where(axis > 0.5, ext.length / 2, ext.diameter / 2)
     c = np.asarray(ext.center)

@@ -225,6 +225,7 @@ def _question(run: Run, doc: dict[str, Any]) -> str:
     """The study's question in a paragraph: objective, set-up, free bounds, limits, model."""
     study, base = run.study, run.study.base
     ext = base.external_magnet
+    assert ext is not None, "a study designs for the external magnet"
     words = " and ".join(OBJECTIVE_WORDS.get(n, n) for n, _ in study.objective)
     free = [
         f"{r['quantity']} {r['low']:.3g}–{r['high']:.3g} {r['unit']}"
