@@ -31,12 +31,10 @@ SI units inside; the report and the manifest say their units.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import platform
 import subprocess
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -51,12 +49,15 @@ from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import curve_disc_radius
 from design.home import HOME_COMMAND
+from design.made import made_design
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, file_key, index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
+from ringpair.report_notes import rounding_note
+from ringpair.runs import inputs_key, sha256, stage_path, stored_stage, tree_hash
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -152,50 +153,6 @@ class Run:
     """With measured data: what the study took from its diagnosis (:func:`calibrated_study`)."""
 
 
-def inputs_key(study: Study, study_text: str, data: Path | None) -> str:
-    """Identity of everything a study's stages depend on: the study file's text, the study
-    as resolved (its base design's values included), the bytes of the base design file it
-    names, the measured data set's files (when given) and the code
-    (:func:`optimize.sizing.pareto.code_digest`: version and source). [-]"""
-    from optimize.sizing.pareto import code_digest
-
-    named = Path(study.base_source) if study.base_source != "embedded" else None
-    base_file = sha256(named) if named is not None and named.is_file() else None
-    data_files = _tree_hash(data) if data is not None else None
-    return stored.digest(study_text, study, base_file, data_files, code_digest())
-
-
-def _stored(run: Run, name: str, key: str) -> tuple[Any, float] | None:
-    """A stage's stored (result, seconds) for ``key``, or None: not stored, or stored but
-    foreign, truncated or altered (then with a warning, and the stage runs again)."""
-    from optimize.sizing.pareto import PACKAGES
-
-    path = _stage_path(run, name, key)
-    if not path.exists():
-        return None
-    try:
-        value = stored.load(path, key, PACKAGES)
-    except stored.StoredError as exc:
-        warnings.warn(
-            f"{path}: not reused ({exc}); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
-        warnings.warn(
-            f"{path}: not reused (not a stage result); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    return value["result"], float(value["seconds"])
-
-
-def _stage_path(run: Run, name: str, key: str) -> Path:
-    return run.out / ".stages" / f"{name}-{key[:20]}.npz"
-
-
 def _stage(
     run: Run, name: str, what: str, inputs: tuple, work: Callable[[], Any], watch: Watch
 ) -> Any:
@@ -204,7 +161,7 @@ def _stage(
     seconds it took."""
     key = stored.digest(name, *inputs)
     watch.start(what)
-    old = _stored(run, name, key)
+    old = stored_stage(run.out, name, key)
     if old is not None:
         result, seconds = old
         run.reused[name] = True
@@ -215,7 +172,7 @@ def _stage(
         except Exception as exc:
             raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
         seconds = time.perf_counter() - t0
-        stored.save(_stage_path(run, name, key), {"result": result, "seconds": seconds}, key)
+        stored.save(stage_path(run.out, name, key), {"result": result, "seconds": seconds}, key)
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
@@ -346,14 +303,6 @@ def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str
     return replace(study, constraints=constraints), what
 
 
-def sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with path.open("rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 @lru_cache(maxsize=1)
 def versions() -> dict[str, str]:
     """Python, key packages and the project's git commit (if known)."""
@@ -425,11 +374,13 @@ def run_study(
     what = "optimisation (IPOPT, multi-start)"
     best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
-        raise StageError("optimise", "the study is infeasible: " + best.report())
-    chosen: Design = best.design
+        raise StageError("optimise", "the study is infeasible: " + best.report(), run)
+    # The hand-off: the optimum rounded to what can be made (design.made); the forward
+    # stage re-runs the model on it and on the raw optimum, and the report states the change.
+    chosen: Design = made_design(best.design)
     what = f"what each limit costs (each moved by {RELAX:.0%}, the NLP solved again)"
     _stage(run, "sensitivity", what, key, lambda: sensitivity(study, best), w)
-    save_design(chosen, out / BEST_DESIGN)
+    save_design(chosen, out / BEST_DESIGN, explicit=True)
     run.handoff.append(out / BEST_DESIGN)
     if study.pareto:
         pareto = _stage(
@@ -449,7 +400,8 @@ def run_study(
         "forward",
         "forward re-simulation with the model for design work (and the disc steerable from home)",
         key,
-        lambda: _forward_pair(study.base, chosen, faithful),
+        lambda: _forward_pair(study.base, chosen, faithful)
+        | {"optimum": sweep_workspace(best.design, STEERABLE_STEP, faithful)},
         w,
     )
     _stage(
@@ -608,7 +560,7 @@ def headline(run: Run) -> str:
         f"({', '.join(sorted(forward_model(run.study).effects))}), against {start:.2f} mm "
         "for the starting "
         f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
-        f"Design file: {run.out / BEST_DESIGN}{parts}."
+        f"{rounding_note(fwd)} Design file: {run.out / BEST_DESIGN}{parts}."
     )
 
 
@@ -619,14 +571,11 @@ def _cad_summary(report: Any) -> dict[str, Any]:
         "files": [str(p) for p in report.files],
         "checks": report.checks,
         "parts": report.parts,
+        "bom": report.bom,
+        "tip": report.tip,
         "passed": report.passed,
         "timings_s": report.timings_s,
     }
-
-
-def _tree_hash(path: Path) -> str:
-    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-    return stored.digest(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
 
 
 def _diagnose(data: Path) -> dict[str, Any]:
@@ -646,10 +595,17 @@ def _diagnose(data: Path) -> dict[str, Any]:
 
 
 def write_manifest(
-    run: Run, study_path: Path | None, data: Path | None, seed: int, failed: str = ""
+    run: Run,
+    study_path: Path | None,
+    data: Path | None,
+    seed: int,
+    failed: str = "",
+    folder: dict[str, Any] | None = None,
 ) -> Path:
     """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file
-    (and the stage that failed, if one did: the files listed are those still valid)."""
+    (and the stage that failed, if one did: the files listed are those still valid);
+    ``folder``: what :mod:`ringpair.runs` says of the run's folder (an interrupted earlier
+    run, the stale files removed), under ``run``."""
     inputs: dict[str, Any] = {
         "study": {
             "path": str(study_path) if study_path else "embedded default study",
@@ -657,11 +613,14 @@ def write_manifest(
         }
     }
     if data is not None:
-        inputs["data"] = {"path": str(data), "sha256": _tree_hash(data)}
+        inputs["data"] = {"path": str(data), "sha256": tree_hash(data)}
     files = sorted(
         p
         for p in run.out.rglob("*")
-        if p.is_file() and ".stages" not in p.parts and p.name != "manifest.json"
+        if p.is_file()
+        and ".stages" not in p.parts
+        and p.name != "manifest.json"
+        and not p.name.startswith(".ringpair")
     )
     doc = {
         "study": run.study.name,
@@ -669,6 +628,7 @@ def write_manifest(
         "versions": versions(),
         "seeds": {"tolerance": seed, "study": run.study.seed},
         "failed_stage": failed or None,
+        "run": folder or {},
         "stages": {
             name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
         },

@@ -49,6 +49,8 @@ def _save(fig: plt.Figure, path: Path, dpi: int = 130) -> None:
 def _magnet_outline(ax: plt.Axes, design: Design, axes: tuple[int, int]) -> None:
     """Outline of the external cylinder projected on a base-frame plane (axis along x/y/z)."""
     ext = design.external_magnet
+    if ext is None:
+        return
     axis = np.abs(np.asarray(ext.magnetization))
     half = np.where(axis > 0.5, ext.length / 2, ext.diameter / 2)
     c = np.asarray(ext.center)
@@ -254,6 +256,20 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("Tip deflection against ring angle")
+    _save(fig, path)
+
+
+def plot_force_map(grid_deg: np.ndarray, force_mn: np.ndarray, path: Path, title: str) -> None:
+    """The magnitude of the force the tip exerts on the obstacles [mN] over (theta1 rows,
+    theta2 columns) [deg]; blank where the tip does not press."""
+    fig, ax = plt.subplots(figsize=(6.0, 5.0))
+    shown = np.ma.masked_invalid(force_mn.T)
+    mesh = ax.pcolormesh(grid_deg, grid_deg, shown, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label="force on the obstacle [mN]")
+    ax.set_xlabel("theta1 (distal ring) [deg]")
+    ax.set_ylabel("theta2 (proximal ring) [deg]")
+    ax.set_title(title + "\n(blank: no contact)", fontsize=9)
+    ax.set_aspect("equal")
     _save(fig, path)
 
 

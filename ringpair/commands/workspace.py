@@ -20,6 +20,7 @@ from ringpair.options import (
     MAX_CONFIGS,
     OVERWRITE_POLICY,
     FloatRange,
+    UserError,
     check_configurations,
     console,
     default_out,
@@ -79,6 +80,11 @@ def workspace(
     from ringpair.plots import plot_controllable, write_workspace_plots
 
     d = design_from(design)
+    if d.environment.obstacles:
+        raise UserError(
+            "workspace: the full-turn map with environment.obstacles is not made yet; "
+            "`ringpair simulate` solves configurations pressed on them"
+        )
     model = model_from(effects)
     check_configurations(len(angle_grid(np.deg2rad(step))) ** 2, max_configs, "--step")
     out = output_path(
