@@ -124,15 +124,20 @@ class RobotAssembly:
         return solid
 
     def to_cq(self, exploded: bool = False) -> cq.Assembly:
-        """A :class:`cadquery.Assembly` with one named, coloured node per instance."""
+        """A :class:`cadquery.Assembly` with one named, coloured node per instance, each
+        its own shape (STEP: one product per instance, named as it)."""
         assy = cq.Assembly(name="ringpair_robot")
         for inst in self.instances:
             loc = inst.location
             if exploded:
                 loc = cq.Location(cq.Vector(*inst.explode)) * loc
-            rgb = self.parts[inst.part].colour
+            part = self.parts[inst.part]
+            rgb = part.colour
+            # A copy for a repeated part: each instance its own STEP product, named as
+            # the instance (a shared solid makes one product, named after the first).
+            solid = part.solid.copy() if part.quantity > 1 else part.solid
             assy.add(
-                self.parts[inst.part].solid,
+                solid,
                 name=inst.name,
                 loc=loc,
                 color=cq.Color(rgb[0], rgb[1], rgb[2], 1.0),

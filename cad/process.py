@@ -98,8 +98,8 @@ class CadProcess:
         return self.si.angular_deflection
 
 
-PROCESSES: dict[str, CadProcess] = {n: CadProcess(p) for n, p in SI_PROCESSES.items()}
-"""The design's processes (:data:`design.process.PROCESSES`) in mm, by name."""
+PROCESSES: dict[str, CadProcess] = {n: CadProcess(p) for n, p in sorted(SI_PROCESSES.items())}
+"""The design's processes (:data:`design.process.PROCESSES`) in mm, by name (sorted)."""
 FDM, RESIN = PROCESSES["fdm"], PROCESSES["resin"]
 
 

@@ -30,10 +30,11 @@ from numpy.typing import ArrayLike
 
 from design.equilibrium import Equilibria, solve_equilibria
 from design.equilibrium.newton import _check, _Checks, _newton
-from design.model import RingPairModel
-from design.obstacles import Obstacle, TipBody, gaps
+from design.model import PRINTED_TIP, RingPairModel
+from design.obstacles import TipBody, gaps, tip_body
+from design.records import Design, Obstacle
 from design.registry import index
-from design.stiffness import tip_stiffness
+from design.stiffness import TipStiffness, tip_stiffness
 
 CONTACT_TOLERANCE = 1e-9
 """|gap| below this is contact; a gap above -this is outside. [m]"""
@@ -55,6 +56,10 @@ class Contact:
     force : shape (N, 3), the force the tip exerts on the obstacle (0 without contact),
         base frame. [N]
     gap : shape (N,), the smallest gap to any obstacle (0 in contact). [m]
+    normal : shape (N, 3), the obstacle's unit normal at the contact point (NaN without
+        contact): the direction the tip is held in. [-]
+    params : shape (k, N), each state's parameters, the contact's wrench applied at the
+        tracked point (what the state solves; e.g. for :func:`design.stiffness.tip_stiffness`).
     """
 
     in_contact: np.ndarray
@@ -62,6 +67,8 @@ class Contact:
     point: np.ndarray
     force: np.ndarray
     gap: np.ndarray
+    normal: np.ndarray
+    params: np.ndarray
 
 
 def _all_gaps(
@@ -103,6 +110,8 @@ def solve_in_contact(
         point=np.full((n, 3), np.nan),
         force=np.zeros((n, 3)),
         gap=np.full(n, np.inf),
+        normal=np.full((n, 3), np.nan),
+        params=np.tile(params[:, None], (1, n)),
     )
     if not obstacles or n == 0:
         return eq, contact
@@ -142,7 +151,30 @@ def solve_in_contact(
     contact.point[pressed] = point * nan[:, None]
     contact.force[pressed] = force * nan[:, None]
     contact.gap[pressed] = np.where(ok, 0.0, np.nan)
+    lam = np.linalg.norm(force, axis=1)
+    contact.normal[pressed] = -force / np.where(lam > 0, lam, np.nan)[:, None] * nan[:, None]
+    contact.params[:, pressed] = p
     return Equilibria(**fields), contact
+
+
+def solve_design_in_contact(
+    design: Design,
+    model: RingPairModel,
+    theta1: ArrayLike,
+    theta2: ArrayLike,
+    *,
+    multistable: bool = False,
+) -> tuple[Equilibria, TipStiffness, Contact]:
+    """The states of ``design`` for commanded angles [rad] with its obstacles
+    (``environment.obstacles``; none: the free states), their tip stiffness (held on the
+    obstacle where the tip presses on one) and their contact."""
+    params = model.parameters(design)
+    body = tip_body(design, printed=PRINTED_TIP in model.effects)
+    obstacles = list(design.environment.obstacles)
+    eq, contact = solve_in_contact(
+        model, params, theta1, theta2, obstacles, body, multistable=multistable
+    )
+    return eq, tip_stiffness(model, contact.params, eq, held=contact.normal), contact
 
 
 def _press(

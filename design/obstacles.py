@@ -29,29 +29,12 @@ from typing import Any
 
 import numpy as np
 
+from design.records import Obstacle
+
 KINDS = ("plane", "sphere", "lumen")
 RIM_POINTS = 720
 """Points per end rim where the lumen's gap is sampled (a radius-3 mm rim: 26 um apart,
 the gap to about 0.1 um)."""
-
-
-@dataclass(frozen=True)
-class Obstacle:
-    """One rigid obstacle, base frame.
-
-    kind : 'plane', 'sphere' or 'lumen'.
-    point : plane: a point on it; sphere: its centre; lumen: a point on its axis. [m]
-    normal : plane: the outward unit normal (the robot's side); lumen: the unit axis;
-        sphere: unused (zeros). [-]
-    radius : sphere, lumen. [m]
-    friction : Coulomb coefficient (0: frictionless). [-]
-    """
-
-    kind: str
-    point: np.ndarray
-    normal: np.ndarray
-    radius: float = 0.0
-    friction: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -86,12 +69,12 @@ def _ends(position: np.ndarray, tangent: np.ndarray, body: TipBody) -> np.ndarra
 
 
 def _plane(o: Obstacle, position, tangent, body):
-    n = o.normal / np.linalg.norm(o.normal)
+    n = np.asarray(o.normal, float) / np.linalg.norm(o.normal)
     ends = _ends(position, tangent, body)
     nt = tangent @ n
     lateral = n[None, :] - nt[:, None] * tangent
     s = np.linalg.norm(lateral, axis=1)
-    heights = (ends - o.point) @ n  # (N, 2)
+    heights = (ends - np.asarray(o.point)) @ n  # (N, 2)
     k = np.argmin(heights, axis=1)
     rows = np.arange(len(position))
     unit = np.where(s[:, None] > 1e-12, lateral / np.maximum(s, 1e-300)[:, None], 0.0)
@@ -103,7 +86,7 @@ def _plane(o: Obstacle, position, tangent, body):
 def _sphere(o: Obstacle, position, tangent, body):
     start = position - body.back * tangent
     length = body.back + body.front
-    rel = o.point - start
+    rel = np.asarray(o.point) - start
     h = np.einsum("ij,ij->i", rel, tangent)
     radial = rel - h[:, None] * tangent
     rc = np.linalg.norm(radial, axis=1)
@@ -111,7 +94,7 @@ def _sphere(o: Obstacle, position, tangent, body):
     hc = np.clip(h, 0.0, length)
     # the body's point nearest to the centre: on the axis at hc, out to the radius at most
     nearest = start + hc[:, None] * tangent + np.minimum(rc, body.radius)[:, None] * out
-    away = nearest - o.point
+    away = nearest - np.asarray(o.point)
     distance = np.linalg.norm(away, axis=1)
     inside = (h >= 0) & (h <= length) & (rc <= body.radius)
     gap = np.where(inside, -np.inf, distance - o.radius)
@@ -120,7 +103,7 @@ def _sphere(o: Obstacle, position, tangent, body):
 
 
 def _lumen(o: Obstacle, position, tangent, body):
-    u = o.normal / np.linalg.norm(o.normal)
+    u = np.asarray(o.normal, float) / np.linalg.norm(o.normal)
     ends = _ends(position, tangent, body)
     # two unit vectors across the tangent
     helper = np.where(np.abs(tangent[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
@@ -132,7 +115,7 @@ def _lumen(o: Obstacle, position, tangent, body):
         np.cos(phi)[None, :, None] * e1[:, None, :] + np.sin(phi)[None, :, None] * e2[:, None, :]
     )  # (N, P, 3)
     points = (ends[:, :, None, :] + ring[:, None, :, :]).reshape(len(position), -1, 3)
-    rel = points - o.point
+    rel = points - np.asarray(o.point)
     radial = rel - (rel @ u)[:, :, None] * u
     r = np.linalg.norm(radial, axis=2)
     k = np.argmax(r, axis=1)

@@ -82,9 +82,17 @@ def _compliance(model: RingPairModel) -> ca.Function:
     return compile_function(ca.Function("compliance", [x, command, prm], [ca.densify(ca.vec(c))]))
 
 
-def tip_stiffness(model: RingPairModel, params: np.ndarray, eq: Equilibria) -> TipStiffness:
+def tip_stiffness(
+    model: RingPairModel,
+    params: np.ndarray,
+    eq: Equilibria,
+    held: np.ndarray | None = None,
+) -> TipStiffness:
     """The tip stiffness of each state of ``eq`` (of ``model`` with ``params``, shape (k,)
-    or (k, N)).
+    or (k, N)). ``held`` (N, 3): where finite, the unit normal of a frictionless obstacle
+    the tip presses on; the tip then moves only along it, C_held = C - C n n^T C /
+    (n^T C n), which is rigid along n (the compliance at the tracked point stands for the
+    contact point's).
 
     The model's Jacobians do not depend on the commanded angles beyond the tip angles (the
     transmissions' twist is linear in the command), so the states' tip angles are passed
@@ -98,6 +106,12 @@ def tip_stiffness(model: RingPairModel, params: np.ndarray, eq: Equilibria) -> T
         p = params if params.ndim == 1 else params[:, ok]
         c = kernels(model).run(_compliance(model), [eq.unknowns[ok].T, eq.tip_angles[ok].T], p)
         compliance[ok] = c[0].T.reshape(-1, 3, 3).transpose(0, 2, 1)
+    if held is not None:
+        pressed = np.isfinite(held).all(axis=1) & np.isfinite(compliance).all(axis=(1, 2))
+        if pressed.any():
+            c, nu = compliance[pressed], held[pressed]
+            cn, ncv = c @ nu[:, :, None], nu[:, None, :] @ c
+            compliance[pressed] = c - cn @ ncv / (ncv @ nu[:, :, None])
     stiffness = np.full((n, 3), np.nan)
     directions = np.full((n, 3, 3), np.nan)
     rigid = np.zeros(n, int)

@@ -35,6 +35,7 @@ from ringpair.commands.cad import cad
 from ringpair.commands.calibrate import calibrate
 from ringpair.commands.diagnose import diagnose
 from ringpair.commands.effects import effects
+from ringpair.commands.force import force
 from ringpair.commands.optimize import optimize
 from ringpair.commands.show import show
 from ringpair.commands.simulate import simulate
@@ -79,6 +80,7 @@ for _command in (
     calibrate,
     diagnose,
     effects,
+    force,
     optimize,
     show,
     simulate,

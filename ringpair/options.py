@@ -18,7 +18,6 @@ it proves are ringpair's (:mod:`design.atomic`).
 from __future__ import annotations
 
 import json
-import math
 import os
 import re
 import stat
@@ -45,6 +44,7 @@ from design.atomic import remove_stale_temporaries
 from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, SWITCHES, RingPairModel, parse_effects
 from design.records import Design
+from design.strict_json import strict
 from ringpair.angles import parse_angles
 
 if TYPE_CHECKING:
@@ -216,17 +216,7 @@ MAX_CONFIGS = click.option(
 def json_text(doc: object) -> str:
     """``doc`` as strict JSON text, indented, with a final newline; NaN and infinities,
     which JSON does not have, become null."""
-    return json.dumps(_strict(doc), indent=2, allow_nan=False) + "\n"
-
-
-def _strict(x: object) -> object:
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _strict(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_strict(v) for v in x]
-    return x
+    return json.dumps(strict(doc)[0], indent=2, allow_nan=False) + "\n"
 
 
 def slug(name: str) -> str:
@@ -451,6 +441,41 @@ def study_from(path: Path | None) -> Study:
 
     with bad_input(StudyError, OSError, UnicodeDecodeError):
         return default_study() if path is None else load_study(path)
+
+
+SCHEDULER_TIMEOUT = 3.0
+"""How long --scheduler's address is given to answer before any work. [s]"""
+
+
+def scheduler_from(address: str | None) -> str | None:
+    """--scheduler checked before any work: a ``tcp://host:port`` (or ``host:port``)
+    address that accepts a connection within SCHEDULER_TIMEOUT; UserError otherwise."""
+    if address is None:
+        return None
+    import socket
+    from urllib.parse import urlsplit
+
+    text = address.strip()
+    url = urlsplit(text if "://" in text else f"tcp://{text}")
+    try:
+        host, port = url.hostname, url.port
+    except ValueError:
+        host, port = None, None
+    if url.scheme not in ("tcp", "tls") or not host or port is None:
+        raise UserError(
+            f"--scheduler {address!r}: expected a Dask scheduler address tcp://host:port "
+            "(e.g. tcp://127.0.0.1:8786)"
+        )
+    try:
+        socket.create_connection((host, port), timeout=SCHEDULER_TIMEOUT).close()
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else exc.strerror or str(exc)
+        raise UserError(
+            f"--scheduler {address}: no Dask scheduler answers at {host}:{port} within "
+            f"{SCHEDULER_TIMEOUT:g} s ({reason}); start one or leave --scheduler out for a "
+            "local cluster"
+        ) from None
+    return text
 
 
 def base_file(study: Study) -> Path | None:

@@ -65,7 +65,7 @@ def test_groove_longer_than_its_pitch_is_rejected() -> None:
 
 
 def test_unknown_process_is_rejected() -> None:
-    with pytest.raises(CadError, match=r"process must be one of 'resin', 'fdm'; got 'sls'"):
+    with pytest.raises(CadError, match=r"process must be one of 'fdm', 'resin'; got 'sls'"):
         get_process("sls")
 
 

@@ -28,6 +28,10 @@ def test_step_assembly_has_named_parts_in_millimetres(fdm_build: CadReport) -> N
     names = {child.name for child in back.children}
     expected = {inst.name for inst in fdm_build.assembly.instances}
     assert names == expected
+    # Each instance is its own product, named as it is (issue 52: the distal ring arrived
+    # in FreeCAD as ring_magnet_proximal001, a copy of the first instance's product).
+    products = re.findall(r"PRODUCT\('([^']*)'", text)
+    assert sorted(products) == sorted([*expected, "ringpair_robot"])
     # Read-back geometry is in mm: the housing keeps its modelled size.
     housing = next(c for c in back.children if c.name == "housing")
     bb = housing.toCompound().BoundingBox()

@@ -14,7 +14,8 @@ from setups import random_design
 from design.contact import CONTACT_TOLERANCE, solve_in_contact
 from design.equilibrium import solve_equilibria
 from design.model import model_for
-from design.obstacles import Obstacle, gaps, tip_body
+from design.obstacles import gaps, tip_body
+from design.records import Obstacle
 from design.registry import index
 
 FORCE, MOMENT = index("applied_force_x"), index("applied_moment_x")
