@@ -30,7 +30,7 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 
 from design.compiled import THREADED_FROM, THREADS, ColumnEvaluator  # noqa: E402
 from design.designfile import default_design  # noqa: E402
-from design.equilibrium import _initial, kernels  # noqa: E402
+from design.equilibrium.kernels import _initial, kernels  # noqa: E402
 from design.model import model_for  # noqa: E402
 
 SIZES = (1, 2, 4, 8, 16, 32, 64, 256, 1024, 4096)

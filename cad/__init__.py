@@ -12,9 +12,10 @@ from cad.errors import CadError
 from cad.gears import WormDrive, WormDriveSpec
 from cad.layout import ActuatorSpec
 from cad.mounting import MountingPieces, MountingSpec, TrackingReport, build_mounting_pieces
-from cad.process import FDM, PROCESSES, RESIN, PrintProcess, get_process
+from cad.process import FDM, PROCESSES, RESIN, CadProcess, get_process
 from cad.selflocking import FRICTION_COEFFICIENTS, SelfLocking, self_locking
 from cad.tracking import GrooveSpec
+from design.process import PrintProcess
 
 __all__ = [
     "FDM",
@@ -24,6 +25,7 @@ __all__ = [
     "Actuator",
     "ActuatorSpec",
     "CadError",
+    "CadProcess",
     "CadReport",
     "GrooveSpec",
     "MountingPieces",

@@ -17,7 +17,7 @@ import cadquery as cq
 from cad import drivetrain
 from cad.housing import housing_parts
 from cad.layout import ActuatorLayout, ActuatorSpec, actuator_layout
-from cad.process import PrintProcess
+from cad.process import CadProcess
 from cad.selflocking import (
     DEFAULT_MATERIAL_PAIR,
     SelfLocking,
@@ -81,7 +81,7 @@ class Actuator:
 
 def build_actuator(
     design: Design,
-    process: PrintProcess,
+    process: CadProcess,
     spec: ActuatorSpec | None = None,
     material_pair: str | None = None,
 ) -> Actuator:

@@ -19,10 +19,10 @@ import cadquery as cq
 import numpy as np
 
 from cad.actuator import Actuator
-from cad.drivetrain import CAP_MM, wire_mount_depth
 from cad.mounting import MountingDims, MountingPieces
 from cad.process import mm
 from cad.solids import cylinder, frame, tube
+from cad.stock import cuts
 from design.geometry import rest_position, ring_centres
 from design.records import Design
 
@@ -60,8 +60,10 @@ DESCRIPTIONS: dict[str, str] = {
     "mounting_piece_proximal": "tip piece on the catheter: ring seat, sleeve, helical groove",
     "mounting_piece_distal": "tip piece on the wire: ring seat, journal, key, helical groove",
     "ring_magnet": "diametrically magnetised ring magnet (bought)",
-    "catheter": "outer catheter (bought), turns the proximal ring",
-    "wire": "inner wire (bought), turns the distal ring",
+    "catheter": "outer catheter (bought, cut to length), glued in the front shaft's nose "
+    "and the proximal tip piece; turns the proximal ring",
+    "wire": "inner wire (bought, cut to length), glued in the wire mount's cap and the "
+    "distal tip piece; turns the distal ring",
 }
 
 
@@ -122,15 +124,20 @@ class RobotAssembly:
         return solid
 
     def to_cq(self, exploded: bool = False) -> cq.Assembly:
-        """A :class:`cadquery.Assembly` with one named, coloured node per instance."""
+        """A :class:`cadquery.Assembly` with one named, coloured node per instance, each
+        its own shape (STEP: one product per instance, named as it)."""
         assy = cq.Assembly(name="ringpair_robot")
         for inst in self.instances:
             loc = inst.location
             if exploded:
                 loc = cq.Location(cq.Vector(*inst.explode)) * loc
-            rgb = self.parts[inst.part].colour
+            part = self.parts[inst.part]
+            rgb = part.colour
+            # A copy for a repeated part: each instance its own STEP product, named as
+            # the instance (a shared solid makes one product, named after the first).
+            solid = part.solid.copy() if part.quantity > 1 else part.solid
             assy.add(
-                self.parts[inst.part].solid,
+                solid,
                 name=inst.name,
                 loc=loc,
                 color=cq.Color(rgb[0], rgb[1], rgb[2], 1.0),
@@ -273,42 +280,38 @@ def build_assembly(
         if name == "mounting_piece_distal":
             loc = loc * flip.inverse
         instances.append(Instance(name, part, loc, explode[name], "tip"))
-    x_p = tip["mounting_piece_proximal"].toTuple()[0][0]
-    x_d = tip["mounting_piece_distal"].toTuple()[0][0]
-
-    # Catheter: from the clamped base (x = 0) into the proximal piece's socket.
-    catheter_end = x_p + d.socket_depth
-    cath = design.robot.catheter
+    tubes = cuts(design, lay, d)
+    # Catheter: from the front shaft's socket floor to the proximal piece's socket floor.
+    cath, c = design.robot.catheter, tubes["catheter"]
     parts["catheter"] = Part(
         "catheter",
-        tube(mm(cath.outer_diameter), mm(cath.inner_diameter), 0.0, catheter_end),
+        tube(mm(cath.outer_diameter), mm(cath.inner_diameter), 0.0, c.length),
         1,
         False,
         COLOURS["catheter"],
         DESCRIPTIONS["catheter"],
     )
-    along_x = frame((0.0, 0.0, 0.0), (1, 0, 0), (0, 1, 0))
-    instances.append(Instance("catheter", "catheter", along_x, (-4.0, 0.0, 0.0), "tip"))
-    # Wire: from inside the wire mount's cap to the distal piece's far face.
-    mount_loc = actuator.instances["wire_mount"][1]
-    mount_front = mount_loc.toTuple()[0][0] - lay.nose_x
-    wire_start = mount_front - wire_mount_depth(lay) - CAP_MM + 1.0
-    wire_end = x_d + d.distal_length
+    instances.append(
+        Instance(
+            "catheter",
+            "catheter",
+            frame((c.start, 0, 0), (1, 0, 0), (0, 1, 0)),
+            (-4.0, 0.0, 0.0),
+            "tip",
+        )
+    )
+    # Wire: flush with the wire mount's back face and with the distal piece's far face.
+    wire, w = design.robot.wire, tubes["wire"]
     parts["wire"] = Part(
         "wire",
-        cylinder(mm(design.robot.wire.outer_diameter), 0.0, wire_end - wire_start)
-        if design.robot.wire.inner_diameter == 0
-        else tube(
-            mm(design.robot.wire.outer_diameter),
-            mm(design.robot.wire.inner_diameter),
-            0.0,
-            wire_end - wire_start,
-        ),
+        cylinder(mm(wire.outer_diameter), 0.0, w.length)
+        if wire.inner_diameter == 0
+        else tube(mm(wire.outer_diameter), mm(wire.inner_diameter), 0.0, w.length),
         1,
         False,
         COLOURS["wire"],
         DESCRIPTIONS["wire"],
     )
-    wire_loc = frame((wire_start, 0.0, 0.0), (1, 0, 0), (0, 1, 0))
+    wire_loc = frame((w.start, 0.0, 0.0), (1, 0, 0), (0, 1, 0))
     instances.append(Instance("wire", "wire", wire_loc, (0.0, 0.0, 0.0), "tip"))
     return RobotAssembly(parts, instances, actuator, mounting, theta1_deg, theta2_deg)

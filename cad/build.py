@@ -7,6 +7,8 @@
     plate_<process>_<k>.3mf    print plate(s) with every copy of every printed part
     checks.csv                 the printability and fit table (cad.checks)
     parts.csv                  parts list: quantity, material, volume, mass, size, file
+    bom.csv                    bill of materials: what to buy (magnets, tube and wire with
+                               cut lengths, screws, adhesive) and what to print (cad.bom)
     cad_summary.json           tracking groove, self-locking and gear numbers, timings
     renders/...png             each part, assembly, actuator, exploded, tip
 
@@ -17,7 +19,7 @@ from __future__ import annotations
 
 import csv
 import io
-import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -28,6 +30,7 @@ import trimesh
 
 from cad.actuator import build_actuator
 from cad.assembly import RobotAssembly, build_assembly
+from cad.bom import bill_of_materials, bom_totals, write_bom_csv
 from cad.checks import (
     CheckRow,
     gear_checks,
@@ -41,11 +44,14 @@ from cad.export import PartMesh, arrange_plates, export_3mf, export_step, export
 from cad.layout import ActuatorSpec
 from cad.meshing import tessellate
 from cad.mounting import MountingSpec, TrackingReport, build_mounting_pieces
-from cad.process import PrintProcess, get_process
+from cad.process import CadProcess, get_process, mm
 from cad.render import render_all
 from cad.selflocking import SelfLocking
+from cad.stock import fasteners
 from design.atomic import write_text
+from design.process import PrintProcess
 from design.records import Design
+from design.strict_json import dumps_strict
 from design.units import GRAM, MM3
 
 TIP_PIECES = ("mounting_piece_proximal", "mounting_piece_distal")
@@ -70,6 +76,9 @@ class CadReport:
     drive : Gear numbers (module, teeth, ratio, lead angle, centre distance, ...).
     timings_s : Seconds per stage (build, export, check, render, total).
     assembly : The solids themselves (mm), for callers that go on working with them.
+    bom : The bill of materials, one dict per row (:data:`cad.bom.BOM_COLUMNS`).
+    tip : The printed tip: process, material, outer diameter and rigid length [mm], mass
+        of both pieces [g], wall [mm].
     """
 
     out_dir: Path
@@ -82,6 +91,8 @@ class CadReport:
     drive: dict[str, float] = field(default_factory=dict)
     timings_s: dict[str, float] = field(default_factory=dict)
     assembly: RobotAssembly | None = None
+    bom: list[dict[str, object]] = field(default_factory=list)
+    tip: dict[str, object] = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
@@ -128,10 +139,13 @@ class CadReport:
             "timings_s": self.timings_s,
             "passed": self.passed,
             "parts": self.parts,
+            "bom": self.bom,
+            "tip": self.tip,
+            "bom_totals": bom_totals(self.bom) if self.bom else None,
         }
 
 
-def part_meshes(assembly: RobotAssembly, process: PrintProcess) -> dict[str, PartMesh]:
+def part_meshes(assembly: RobotAssembly, process: CadProcess) -> dict[str, PartMesh]:
     """Tessellate every part once, at the process's export tolerance (print frame). [mm]"""
     out = {}
     for name, part in assembly.parts.items():
@@ -169,14 +183,15 @@ def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
 
 def _parts_table(
     assembly: RobotAssembly,
-    process_of: Callable[[str], PrintProcess],
+    process_of: Callable[[str], CadProcess],
     design: Design,
     meshes: dict[str, PartMesh],
 ) -> list[dict[str, object]]:
     """One dict per part: name, quantity, printed, material, volume_mm3 [mm^3], mass_g [g]
     (one piece, 4 significant digits; printed parts at the process material's density,
-    bought ones at the design's), size_mm (bounding box x, y, z of its exported mesh: OCC's
-    box of a curved solid can be loose by tenths of a mm) [mm], file, description."""
+    bought ones at the design's, screws nominal), size_mm (bounding box x, y, z of its
+    exported mesh: OCC's box of a curved solid can be loose by tenths of a mm) [mm], file,
+    description."""
     bought = _bought_materials(design)
     rows = []
     for name, part in assembly.parts.items():
@@ -190,6 +205,7 @@ def _parts_table(
                 "name": name,
                 "quantity": part.quantity,
                 "printed": part.printed,
+                "process": process.name if part.printed else "",
                 "material": material,
                 "volume_mm3": round(volume, 3),
                 "mass_g": float(f"{volume * MM3 * density / GRAM:.4g}"),
@@ -198,7 +214,28 @@ def _parts_table(
                 "description": part.description,
             }
         )
+    for f in fasteners(assembly.actuator.layout):
+        head = max(f.head, f.diameter)
+        # nominal: the thread's shank and a head as tall as the thread is wide (ISO 4762)
+        volume = math.pi / 4 * (f.diameter**2 * f.length + f.head**2 * f.diameter)
+        rows.append(
+            {
+                "name": f.name,
+                "quantity": f.quantity,
+                "printed": False,
+                "material": f"steel, {f.standard}",
+                "volume_mm3": round(volume, 3),
+                "mass_g": float(f"{volume * MM3 * STEEL_DENSITY / GRAM:.4g}"),
+                "size_mm": [head, head, f.length + (f.diameter if f.head else 0.0)],
+                "file": "bought",
+                "description": f.where,
+            }
+        )
     return rows
+
+
+STEEL_DENSITY = 7850.0
+"""Density of the screws' steel, for their nominal mass. [kg/m^3]"""
 
 
 def _write_parts_csv(rows: list[dict[str, object]], path: Path) -> Path:
@@ -234,8 +271,9 @@ def build_parts(
     out_dir : Output directory (created); files in it are replaced atomically.
     process : ``"fdm"`` or ``"resin"``, or a :class:`~cad.process.PrintProcess`.
     tip_process : the process of the two tip pieces (the parts the model carries, whose
-        fits and walls set their size and mass); None: ``process``. ``ringpair study``
-        passes the design's own ``tip.mounting.process``.
+        fits and walls set their size and mass); None: the design's own ``tip.mounting``
+        (process, wall, fits, density: the pieces the model knows); another process
+        reprints them with its numbers (:func:`cad.mounting.tip_design`).
     mounting, actuator : Designer's choices for the tip pieces and the actuator.
     material_pair : Worm/wheel material pair for the self-locking check.
     render : Also write the PNG renders.
@@ -246,13 +284,13 @@ def build_parts(
         (a ValueError, :class:`~cad.errors.CadError`) for impossible dimensions.
     """
     proc = get_process(process)
-    tip = proc if tip_process is None else get_process(tip_process)
     out = Path(out_dir)
     report = CadReport(out_dir=out, process=proc.name)
     t0 = time.perf_counter()
 
     # All geometry first: impossible dimensions fail here, before anything is written.
-    pieces = build_mounting_pieces(design, tip, mounting)
+    pieces = build_mounting_pieces(design, tip_process, mounting)
+    tip = pieces.process
     act = build_actuator(design, proc, actuator, material_pair)
     assembly = build_assembly(design, act, pieces)
     out.mkdir(parents=True, exist_ok=True)
@@ -264,13 +302,14 @@ def build_parts(
     report.files += list(stl_paths.values())
     report.files.append(export_step(assembly, out / STEP_FILE))
 
-    def process_of(name: str) -> PrintProcess:
+    def process_of(name: str) -> CadProcess:
         return tip if name in TIP_PIECES else proc
 
     for each in {p.name: p for p in (proc, tip)}.values():  # one set of plates per printer
         mine = [m for m in printed if process_of(m.name).name == each.name]
         for k, plate in enumerate(arrange_plates(mine, each), start=1):
-            report.files.append(export_3mf(meshes, plate, out / f"plate_{each.name}_{k}.3mf"))
+            path = out / f"plate_{each.name}_{k}.3mf"
+            report.files.append(export_3mf(meshes, plate, path, each))
     t2 = time.perf_counter()
 
     rows: list[CheckRow] = []
@@ -292,6 +331,8 @@ def build_parts(
     report.files.append(write_csv(rows, out / "checks.csv"))
     report.parts = _parts_table(assembly, process_of, design, meshes)
     report.files.append(_write_parts_csv(report.parts, out / "parts.csv"))
+    report.bom = bill_of_materials(design, assembly, report.parts)
+    report.files.append(write_bom_csv(report.bom, out / "bom.csv"))
     t3 = time.perf_counter()
 
     if render:
@@ -302,6 +343,15 @@ def build_parts(
     t4 = time.perf_counter()
 
     report.assembly = assembly
+    g = pieces.geometry
+    report.tip = {
+        "process": tip.name,
+        "material": tip.material,
+        "outer_diameter_mm": round(pieces.dims.outer_diameter, 3),
+        "rigid_length_mm": round(mm(g.rigid_length), 3),
+        "mass_g": float(f"{(g.proximal_mass + g.distal_mass) / GRAM:.3g}"),
+        "wall_mm": pieces.dims.wall,
+    }
     report.tracking = pieces.tracking()
     report.self_locking = act.locking
     report.drive = act.layout.drive.table()
@@ -313,6 +363,6 @@ def build_parts(
         "total": t4 - t0,
     }
     summary = out / "cad_summary.json"
-    write_text(summary, json.dumps(report.to_json(), indent=2) + "\n")
+    write_text(summary, dumps_strict(report.to_json()))
     report.files.append(summary)
     return report

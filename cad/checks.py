@@ -40,7 +40,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from cad.actuator import ToothZone
 from cad.assembly import Instance, RobotAssembly
 from cad.meshing import location_matrix, transform_points
-from cad.process import PrintProcess
+from cad.process import CadProcess
 from cad.solids import cylinder
 from design.atomic import write_text
 
@@ -123,7 +123,7 @@ def part_checks(
     name: str,
     stl_path: Path,
     cad_volume: float,
-    process: PrintProcess,
+    process: CadProcess,
     teeth: ToothZone | None = None,
 ) -> tuple[list[CheckRow], trimesh.Trimesh]:
     """Watertight, volume, smallest wall (and tooth tip) and build volume of one part.

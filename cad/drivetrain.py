@@ -14,7 +14,7 @@ import math
 import cadquery as cq
 
 from cad.gears import wheel_teeth, worm_thread
-from cad.layout import HEX_ENGAGEMENT_MM, ActuatorLayout
+from cad.layout import CAP_MM, HEX_ENGAGEMENT_MM, WIRE_LEAD_IN_MM, ActuatorLayout
 from cad.solids import (
     X_AXIS,
     Z_AXIS,
@@ -27,7 +27,6 @@ from cad.solids import (
     tube,
 )
 
-CAP_MM = 6.0
 COLLAR_MM = 2.0
 KNOB_FLUTES = 18
 
@@ -49,7 +48,9 @@ def _wheel_with_hub(lay: ActuatorLayout, hub_end: float) -> cq.Shape:
 
 def gear_shaft_front(lay: ActuatorLayout) -> cq.Solid:
     """Front hollow gear shaft: wheel, hub, journals through B1 and B0, clip groove, and
-    a nose with the catheter socket and a radial glue port between the bulkheads."""
+    a nose with the catheter's glued socket (:attr:`ActuatorLayout.catheter_socket_depth`
+    deep, the catheter bottoming on the shoulder of the narrower bore behind it) and a
+    radial glue port between the bulkheads."""
     s, ax = lay.spec, lay.spec.axial_clearance_mm
     b0, b1 = lay.bulkheads[0], lay.bulkheads[1]
     u = lambda x: _front_u(lay, x)  # noqa: E731
@@ -62,11 +63,11 @@ def gear_shaft_front(lay: ActuatorLayout) -> cq.Solid:
         cylinder(s.shaft_journal_mm, u(clip.hi), nose),
     )
     port_x = (b1.hi + b0.lo) / 2
-    socket_depth = max(s.catheter_socket_mm, lay.nose_x - port_x + 2.0)
+    socket_depth = lay.catheter_socket_depth
     port_d = 1.5 * lay.process.wall_mm
     cuts = [
-        cylinder(s.wire_passage_mm, -1.0, nose + 1.0),
-        cylinder(lay.catheter_outer_mm + lay.fit, nose - socket_depth, nose + 1.0),
+        cylinder(lay.front_passage, -1.0, nose - socket_depth + 0.01),
+        cylinder(lay.catheter_socket_diameter, nose - socket_depth, nose + 1.0),
         radial_port(port_d, u(port_x), s.shaft_journal_mm / 2, 90.0),
     ]
     return single_solid(body.cut(*cuts).clean(), "front gear shaft")
@@ -176,6 +177,11 @@ def wire_mount_depth(lay: ActuatorLayout) -> float:
     return HEX_ENGAGEMENT_MM + lay.spec.wire_mount_travel_mm
 
 
+def wire_mount_front(lay: ActuatorLayout) -> float:
+    """Actuator-frame x of the wire mount's front face at mid-travel. [mm]"""
+    return lay.hex.lo + wire_mount_depth(lay) - lay.spec.wire_mount_travel_mm / 2
+
+
 def wire_mount(lay: ActuatorLayout) -> cq.Solid:
     """Sliding wire mount: a hex bore on the rear shaft's hex (torque, axial travel), a set
     screw to lock it, and a cap with the wire bore and a glue port. Front face at z = 0."""
@@ -183,8 +189,9 @@ def wire_mount(lay: ActuatorLayout) -> cq.Solid:
     depth = wire_mount_depth(lay)
     length = depth + CAP_MM
     hex_bore = hexagon_prism(s.hex_mm + lay.fit, -1.0, depth)
-    wire_bore = cylinder(lay.wire_mm + lay.fit, depth - 1.0, length + 1.0)
-    countersink = cq.Solid.makeCone(1.5, 0.0, 1.5, cq.Vector(0, 0, depth - 0.01), Z_AXIS)
+    wire_bore = cylinder(lay.wire_seat_diameter, depth - 1.0, length + 1.0)
+    lead_in = WIRE_LEAD_IN_MM
+    countersink = cq.Solid.makeCone(lead_in, 0.0, lead_in, cq.Vector(0, 0, depth - 0.01), Z_AXIS)
     set_screw = cq.Solid.makeCylinder(
         s.set_screw_tap_mm / 2, s.wire_mount_mm, cq.Vector(0, 0, depth / 2), X_AXIS
     )
@@ -235,6 +242,6 @@ def placements(lay: ActuatorLayout) -> dict[str, tuple[str, cq.Location]]:
     out["shaft_clip_front"] = ("shaft_clip", frame((cf.lo, 0, h), (1, 0, 0), (0, 0, 1)))
     out["shaft_clip_rear"] = ("shaft_clip", frame((cr.hi, 0, h), (-1, 0, 0), (0, 0, 1)))
     # Wire mount at mid-travel: front face `travel/2` behind the front end of its range.
-    front_face = lay.hex.lo + wire_mount_depth(lay) - s.wire_mount_travel_mm / 2
+    front_face = wire_mount_front(lay)
     out["wire_mount"] = ("wire_mount", frame((front_face, 0, h), (-1, 0, 0), (0, 1, 0)))
     return out

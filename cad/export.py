@@ -13,14 +13,15 @@ import math
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
+from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 import trimesh
 
 from cad.assembly import RobotAssembly
 from cad.errors import CadError
-from cad.process import PrintProcess
+from cad.printing import print_setup
+from cad.process import CadProcess
 from design.atomic import atomic_path
 
 PLATE_SPACING_MM = 6.0
@@ -66,7 +67,7 @@ class PlateItem:
     offset: tuple[float, float, float]
 
 
-def arrange_plates(meshes: list[PartMesh], process: PrintProcess) -> list[list[PlateItem]]:
+def arrange_plates(meshes: list[PartMesh], process: CadProcess) -> list[list[PlateItem]]:
     """Shelf-pack every copy of every part onto as few plates as the build area needs.
 
     Parts keep their print orientation; each footprint is its bounding rectangle plus
@@ -99,8 +100,12 @@ def arrange_plates(meshes: list[PartMesh], process: PrintProcess) -> list[list[P
     return plates
 
 
-def threemf_bytes(meshes: dict[str, PartMesh], plate: list[PlateItem]) -> bytes:
-    """A 3MF package (core specification 1.3): one object per part, one build item per copy."""
+def threemf_bytes(
+    meshes: dict[str, PartMesh], plate: list[PlateItem], process: CadProcess | None = None
+) -> bytes:
+    """A 3MF package (core specification 1.3): one object per part, one build item per
+    copy; each object carries its print set-up (:mod:`cad.printing`: the face on the bed,
+    supports, why) and the process as metadata (``ringpair:`` names)."""
     ids = {name: k + 1 for k, name in enumerate(sorted({it.part for it in plate}))}
     out = io.StringIO()
     out.write('<?xml version="1.0" encoding="UTF-8"?>\n')
@@ -111,7 +116,19 @@ def threemf_bytes(meshes: dict[str, PartMesh], plate: list[PlateItem]) -> bytes:
     out.write(' <metadata name="Application">ringpair cad</metadata>\n <resources>\n')
     for name, oid in ids.items():
         m = meshes[name]
-        out.write(f'  <object id="{oid}" name={quoteattr(name)} type="model">\n   <mesh>\n')
+        setup = print_setup(name)
+        meta = {
+            "ringpair:on_bed": setup.on_bed,
+            "ringpair:supports": setup.supports,
+            "ringpair:orientation": setup.why,
+            **({"ringpair:process": process.name} if process is not None else {}),
+        }
+        out.write(f'  <object id="{oid}" name={quoteattr(name)} type="model">\n')
+        out.write("   <metadatagroup>\n")
+        out.writelines(
+            f"    <metadata name={quoteattr(k)}>{escape(v)}</metadata>\n" for k, v in meta.items()
+        )
+        out.write("   </metadatagroup>\n   <mesh>\n")
         out.write("    <vertices>\n")
         out.writelines(
             f'     <vertex x="{x:.5f}" y="{y:.5f}" z="{z:.5f}"/>\n' for x, y, z in m.vertices
@@ -149,9 +166,14 @@ def threemf_bytes(meshes: dict[str, PartMesh], plate: list[PlateItem]) -> bytes:
     return buf.getvalue()
 
 
-def export_3mf(meshes: dict[str, PartMesh], plate: list[PlateItem], path: Path) -> Path:
-    """Write one print plate as 3MF (mm)."""
-    data = threemf_bytes(meshes, plate)
+def export_3mf(
+    meshes: dict[str, PartMesh],
+    plate: list[PlateItem],
+    path: Path,
+    process: CadProcess | None = None,
+) -> Path:
+    """Write one print plate as 3MF (mm), its parts' print set-ups as metadata."""
+    data = threemf_bytes(meshes, plate, process)
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)

@@ -23,10 +23,16 @@ from dataclasses import dataclass, field
 
 from cad.errors import require
 from cad.gears import WormDrive, WormDriveSpec
-from cad.process import PrintProcess, mm
+from cad.process import CadProcess, mm
 from design.records import Design
 
 HEX_ENGAGEMENT_MM = 15.0
+"""Length of the rear shaft's hex the wire mount keeps anywhere in its travel. [mm]"""
+CAP_MM = 6.0
+"""Length of the wire mount's cap, which holds the wire's glued seat. [mm]"""
+WIRE_LEAD_IN_MM = 1.5
+"""Depth (and radius: a 90 deg cone) of the cone at the cap's inner face that leads the
+wire into its seat. [mm]"""
 
 
 @dataclass(frozen=True)
@@ -43,9 +49,11 @@ class ActuatorSpec:
     bearing_span_mm : Clear gap between the two bulkheads carrying one shaft. [mm]
     gear_clearance_mm : Between a worm and the nearest wheel, bulkhead or wall. [mm]
     axial_clearance_mm : End play at hubs, collars and clips. [mm]
-    catheter_socket_mm : Depth of the catheter socket in the front shaft's nose. [mm]
-    wire_passage_mm : Bore of the shafts for the wire (and of the front shaft behind the
-        catheter socket). [mm]
+    catheter_socket_mm : Least depth of the catheter's glued socket in the front shaft's
+        nose (it reaches past the glue port at least). [mm]
+    wire_passage_mm : Bore of the rear shaft for the wire; the front shaft's bore behind
+        the catheter socket is the catheter's lumen (at most this), so the catheter
+        bottoms on a shoulder. [mm]
     hex_mm : Across-flats of the rear shaft's hex end that drives the wire mount. [mm]
     wire_mount_travel_mm : Axial adjustment range of the wire mount. [mm]
     wire_mount_mm : Outer diameter of the wire mount. [mm]
@@ -104,8 +112,9 @@ class ActuatorLayout:
 
     spec: ActuatorSpec
     drive: WormDrive
-    process: PrintProcess
+    process: CadProcess
     catheter_outer_mm: float
+    catheter_inner_mm: float
     wire_mm: float
     shaft_height: float
     wheel_x: tuple[float, float]
@@ -121,6 +130,37 @@ class ActuatorLayout:
     knob_z: Span
 
     # --- derived sizes -------------------------------------------------------------
+    @property
+    def catheter_socket_diameter(self) -> float:
+        """The catheter's glued socket in the front shaft's nose: catheter + fit. [mm]"""
+        return self.catheter_outer_mm + self.fit
+
+    @property
+    def catheter_socket_depth(self) -> float:
+        """Depth of that socket: the spec's least, and past the glue port (between the
+        front bulkheads) by 2 mm, so the port feeds the socket. [mm]"""
+        port = (self.bulkheads[1].hi + self.bulkheads[0].lo) / 2
+        return max(self.spec.catheter_socket_mm, self.nose_x - port + 2.0)
+
+    @property
+    def front_passage(self) -> float:
+        """The front shaft's bore behind the catheter socket: the catheter's lumen (at most
+        the spec's wire passage), at least the wire plus running clearance; smaller than
+        the catheter, so the catheter bottoms on the shoulder. [mm]"""
+        lumen = min(self.catheter_inner_mm, self.spec.wire_passage_mm)
+        return max(lumen, self.wire_mm + self.running)
+
+    @property
+    def wire_seat_diameter(self) -> float:
+        """The wire's glued seat through the wire mount's cap: wire + fit. [mm]"""
+        return self.wire_mm + self.fit
+
+    @property
+    def wire_seat_depth(self) -> float:
+        """Glued length of the wire in the cap: the cap's length less the lead-in cone down
+        to the seat's bore (the wire is cut flush with the cap's back face). [mm]"""
+        return CAP_MM - (WIRE_LEAD_IN_MM - self.wire_seat_diameter / 2)
+
     @property
     def fit(self) -> float:
         """Diametral allowance of a seat for a pushed-in part. [mm]"""
@@ -170,7 +210,7 @@ class ActuatorLayout:
 
 
 def actuator_layout(
-    design: Design, process: PrintProcess, spec: ActuatorSpec | None = None
+    design: Design, process: CadProcess, spec: ActuatorSpec | None = None
 ) -> ActuatorLayout:
     """Place every part of the actuator for ``design`` and ``process``.
 
@@ -195,6 +235,17 @@ def actuator_layout(
         "actuator: wire passage diameter",
         f"larger than the wire plus running clearance ({wire + process.running_clearance_mm:g} mm)",
         s.wire_passage_mm,
+    )
+    passage = max(
+        min(mm(design.robot.catheter.inner_diameter), s.wire_passage_mm),
+        wire + process.running_clearance_mm,
+    )
+    require(
+        passage < catheter,
+        "actuator: front shaft bore behind the catheter socket (catheter lumen, at least the "
+        "wire plus running clearance)",
+        f"smaller than the catheter ({catheter:g} mm) so the catheter bottoms on a shoulder",
+        passage,
     )
     require(
         s.hex_mm / math.cos(math.pi / 6) < s.shaft_journal_mm,
@@ -264,6 +315,7 @@ def actuator_layout(
         drive=drive,
         process=process,
         catheter_outer_mm=catheter,
+        catheter_inner_mm=mm(design.robot.catheter.inner_diameter),
         wire_mm=wire,
         shaft_height=shaft_height,
         wheel_x=(wheel_front, wheel_rear),

@@ -32,35 +32,36 @@ proximal face (z = 0) and runs past both faces.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cadquery as cq
 
 from cad.errors import require
-from cad.process import PrintProcess, get_process, mm
+from cad.process import CadProcess, get_process, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
 from design.geometry import WIRE_CLEARANCE, ring_clears_wire
-from design.mounting import GROOVE_RANGE, MAX_STOP_ANGLE, TipGeometry, tip_geometry
-from design.records import Design
+from design.mounting import GROOVE_RANGE, MAX_STOP_ANGLE, TipGeometry, design_tip_geometry
+from design.process import PROCESSES as SI_PROCESSES
+from design.process import PrintProcess
+from design.records import Design, Mounting
 from design.units import DEG, MM
 
 
 @dataclass(frozen=True)
 class MountingSpec:
     """Designer's choices beyond the design file (lengths in mm, angles in deg); the
-    defaults make the pieces the model knows (:func:`design.mounting.tip_geometry`).
+    defaults make the pieces the model knows (:func:`design.mounting.tip_geometry`). The
+    wall, fits and material are the design's own ``tip.mounting``, never chosen here.
 
     groove_range_deg : Rotation each tracking groove reads, 180 (the paper's sweep) to
         360. [deg]
-    wall_mm : Structural wall; ``None`` uses the process's (1.25 x its minimum). [mm]
     outer_diameter_mm : Outer diameter of both pieces; ``None`` uses the smallest that
         holds every wall. [mm]
     socket_depth_mm : Depth of the catheter socket; ``None``: two catheter diameters. [mm]
     """
 
     groove_range_deg: float = math.degrees(GROOVE_RANGE)
-    wall_mm: float | None = None
     outer_diameter_mm: float | None = None
     socket_depth_mm: float | None = None
 
@@ -158,6 +159,8 @@ class MountingPieces:
     dims: MountingDims
     spec: MountingSpec
     geometry: TipGeometry
+    mounting: Mounting
+    process: CadProcess
 
     def tracking(self) -> tuple[TrackingReport, TrackingReport]:
         """Readout resolution and range of both grooves."""
@@ -176,14 +179,14 @@ class MountingPieces:
             )
         return out[0], out[1]
 
-    def describe(self, process: PrintProcess) -> list[str]:
+    def describe(self) -> list[str]:
         """Lines for reports: the rules the pieces were made with (walls and clearances),
         what the model takes from them, and what each groove reads. [mm, g, deg]"""
-        d, g = self.dims, self.geometry
+        d, g, m, p = self.dims, self.geometry, self.mounting, self.process
         lines = [
-            f"tip pieces ({process.name}): wall {d.wall:g} mm (process minimum "
-            f"{process.min_wall_mm:g}), fit allowance {process.fit_allowance_mm:g} mm, running "
-            f"clearance {process.running_clearance_mm:g} mm; outer diameter "
+            f"tip pieces ({p.name}): wall {d.wall:g} mm (process minimum "
+            f"{p.min_wall_mm:g}), fit allowance {mm(m.fit_allowance):g} mm, running "
+            f"clearance {mm(m.running_clearance):g} mm; outer diameter "
             f"{d.outer_diameter:.3g} mm, rigid segment {mm(g.rigid_length):.3g} mm (tracked "
             f"point {mm(g.rigid_offset):.3g} mm along it), masses "
             f"{g.proximal_mass * 1e3:.3g} g + {g.distal_mass * 1e3:.3g} g; stops "
@@ -197,44 +200,62 @@ class MountingPieces:
         return lines
 
 
-def tip_geometry_for(design: Design, process: PrintProcess, spec: MountingSpec) -> TipGeometry:
-    """The one tip geometry (:func:`design.mounting.tip_geometry`) of ``design`` printed
-    with ``process``, with the spec's choices. [SI]"""
-    t, r = design.tip, design.robot
-    wall = spec.wall_mm if spec.wall_mm is not None else process.wall_mm
-    optional = {"outer_diameter": spec.outer_diameter_mm, "socket_depth": spec.socket_depth_mm}
-    return tip_geometry(
-        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.gap,
-        r.catheter.outer_diameter, r.wire.outer_diameter, r.catheter.inner_diameter,
-        wall * MM, process.fit_allowance_mm * MM, process.running_clearance_mm * MM,
-        process.material_density_kg_m3, t.mounting.stop_angle,
-        groove_range=spec.groove_range_deg * DEG,
-        **{k: v * MM for k, v in optional.items() if v is not None},
-    )  # fmt: skip
+def tip_design(design: Design, process: str | PrintProcess | CadProcess | None = None) -> Design:
+    """``design`` with the tip pieces printed by ``process``: None or the design's own
+    process: the design as it is (its ``tip.mounting``, the pieces the model carries);
+    another process: ``tip.mounting`` reprinted with that process's wall, fits and
+    density (stops and pre-twist kept), pieces the design's model does not know."""
+    mounting = design.tip.mounting
+    if process is None or get_process(process).si == SI_PROCESSES.get(mounting.process):
+        return design
+    p = get_process(process).si
+    reprinted = replace(
+        mounting,
+        process=p.name,
+        wall=p.wall,
+        fit_allowance=p.fit_allowance,
+        running_clearance=p.running_clearance,
+        density=p.density,
+    )
+    return replace(design, tip=replace(design.tip, mounting=reprinted))
 
 
-def tip_process(design: Design, process: str | PrintProcess | None = None) -> PrintProcess:
+def tip_process(
+    design: Design, process: str | PrintProcess | CadProcess | None = None
+) -> CadProcess:
     """The process the tip pieces are printed with: ``process``, or the design's
     ``tip.mounting.process`` (resin by default) when None."""
     return get_process(design.tip.mounting.process if process is None else process)
 
 
+def tip_geometry_for(design: Design, spec: MountingSpec) -> TipGeometry:
+    """The one tip geometry of ``design`` (:func:`design.mounting.design_tip_geometry`:
+    its own ``tip.mounting``, as the model takes it), with the spec's choices. [SI]"""
+    optional = {"outer_diameter": spec.outer_diameter_mm, "socket_depth": spec.socket_depth_mm}
+    return design_tip_geometry(
+        design,
+        groove_range=spec.groove_range_deg * DEG,
+        **{k: v * MM for k, v in optional.items() if v is not None},
+    )
+
+
 def mounting_dims(
     design: Design,
-    process: str | PrintProcess | None = None,
+    process: str | PrintProcess | CadProcess | None = None,
     spec: MountingSpec | None = None,
 ) -> MountingDims:
     """Every dimension of the pieces of ``design`` printed with ``process`` (None: the
-    design's ``tip.mounting.process``), in mm, checked.
+    design's own ``tip.mounting``, :func:`tip_design`), in mm, checked.
 
     Raises :class:`~cad.errors.CadError` naming the quantity for any impossible geometry.
     """
     spec = spec or MountingSpec()
     proc = tip_process(design, process)
+    design = tip_design(design, process)
     tip, wire, cath = design.tip, design.robot.wire, design.robot.catheter
     Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
     dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
-    w = spec.wall_mm if spec.wall_mm is not None else proc.wall_mm
+    w = mm(tip.mounting.wall)
     require(mm(tip.magnet_length) > 0, "tip ring: magnet length", "positive", mm(tip.magnet_length))
     require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
     require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
@@ -273,7 +294,7 @@ def mounting_dims(
             "positive",
             spec.socket_depth_mm,
         )
-    g = tip_geometry_for(design, proc, spec)
+    g = tip_geometry_for(design, spec)
     d = {name: mm(float(getattr(g, name))) for name in _LENGTHS}
     require(
         d["wire_bore"] < dm,
@@ -290,7 +311,7 @@ def mounting_dims(
     outer, skin = d["outer_diameter"], 2 * (w + d["groove_depth"])
     # The derived outer diameter is the needed one to rounding; compare with that slack.
     slack = 1e-9 * max(outer, 1.0)
-    clr = proc.running_clearance_mm
+    clr = mm(tip.mounting.running_clearance)
     require(
         d["seat_diameter"] <= outer - skin - 2 * w - clr + slack,
         "mounting piece: magnet seat diameter (magnet + fit allowance)",
@@ -439,7 +460,7 @@ def _cut_all(envelope: cq.Shape, groove: cq.Solid | None, cuts: list[cq.Solid]) 
 
 def build_mounting_pieces(
     design: Design,
-    process: str | PrintProcess | None = None,
+    process: str | PrintProcess | CadProcess | None = None,
     spec: MountingSpec | None = None,
     with_groove: bool = True,
 ) -> MountingPieces:
@@ -449,19 +470,22 @@ def build_mounting_pieces(
     ----------
     design : The robot (SI); its ring, wire and catheter sizes set the seats and bores,
         its ``tip.mounting`` the stops (and, with ``process`` None, the process).
-    process : Fits, clearances, minimum wall and material; None: the design's
-        ``tip.mounting.process`` (resin unless the design file says otherwise), the
-        pieces the model knows.
+    process : None (the pieces the model knows): the design's own ``tip.mounting``
+        (process, wall, fits, density); another process reprints them with its numbers
+        (:func:`tip_design`).
     spec : Designer's choices; the defaults make the pieces the model knows.
     with_groove : Leave the helical groove out (for checks against closed-form volumes).
     """
     spec = spec or MountingSpec()
     proc = tip_process(design, process)
+    design = tip_design(design, process)
     dims = mounting_dims(design, proc, spec)
     return MountingPieces(
         proximal=proximal_piece(dims, with_groove),
         distal=distal_piece(dims, with_groove),
         dims=dims,
         spec=spec,
-        geometry=tip_geometry_for(design, proc, spec),
+        geometry=tip_geometry_for(design, spec),
+        mounting=design.tip.mounting,
+        process=proc,
     )

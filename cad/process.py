@@ -1,8 +1,9 @@
-"""Print processes: fits, clearances, smallest printable wall and build volume.
+"""The print processes in millimetres: the CAD's view of :mod:`design.process`.
 
-CAD works in millimetres: every length here is in mm. The values are design rules for a
-typical machine of each kind (stated per field), not properties of a particular printer;
-pass your own :class:`PrintProcess` to :func:`cad.build.build_parts` to use others.
+CAD works in millimetres: every length here is in mm. The numbers are the design's one
+process table (:data:`design.process.PROCESSES`, SI), which the model reads too; this
+module only converts them. Pass a :class:`design.process.PrintProcess` of your own to
+:func:`cad.build.build_parts` to use other rules.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cad.errors import CadError
-from design.mounting import WALL_FACTOR
+from design.process import PROCESSES as SI_PROCESSES
+from design.process import PrintProcess
 from design.units import MM
 
 
@@ -21,77 +23,93 @@ def mm(length_m: float) -> float:
 
 
 @dataclass(frozen=True)
-class PrintProcess:
-    """How parts are made, as far as the geometry must know.
+class CadProcess:
+    """A :class:`design.process.PrintProcess` in the CAD's units (mm).
 
-    name : ``"fdm"`` or ``"resin"`` (or your own).
-    printer : The machine whose build volume is used, for the report.
-    min_wall_mm : Thinnest wall the process prints reliably. [mm]
-    fit_allowance_mm : Added to the diameter of a seat for a bought part that is glued or
-        pushed in (magnet ring, catheter, wire, bushing). [mm]
-    running_clearance_mm : Diametral clearance between parts that turn on each other. [mm]
-    backlash_mm : Circular backlash of a gear mesh, at the pitch circle. [mm]
-    build_volume_mm : Usable build volume x, y, z. [mm]
-    material : The printed material, for the parts list.
-    material_density_kg_m3 : Density of the printed material, for part masses. [kg/m^3]
-    linear_deflection_mm : Chord tolerance of the exported meshes. [mm]
-    angular_deflection_rad : Angular tolerance of the exported meshes. [rad]
+    si : The process as the design knows it. [SI]
     """
 
-    name: str
-    printer: str
-    min_wall_mm: float
-    fit_allowance_mm: float
-    running_clearance_mm: float
-    backlash_mm: float
-    build_volume_mm: tuple[float, float, float]
-    material: str
-    material_density_kg_m3: float
-    linear_deflection_mm: float = 0.02
-    angular_deflection_rad: float = 0.3
+    si: PrintProcess
+
+    @property
+    def name(self) -> str:
+        """``"fdm"``, ``"resin"`` or your own."""
+        return self.si.name
+
+    @property
+    def printer(self) -> str:
+        """The machine class whose build volume is used."""
+        return self.si.printer
+
+    @property
+    def material(self) -> str:
+        """The printed material."""
+        return self.si.material
+
+    @property
+    def min_wall_mm(self) -> float:
+        """Thinnest wall the process prints reliably. [mm]"""
+        return mm(self.si.min_wall)
 
     @property
     def wall_mm(self) -> float:
-        """Default structural wall: 25 % above the process minimum
-        (:data:`design.mounting.WALL_FACTOR`). [mm]"""
-        return WALL_FACTOR * self.min_wall_mm
+        """Default structural wall (:data:`design.process.WALL_FACTOR` x the minimum). [mm]"""
+        return mm(self.si.wall)
+
+    @property
+    def fit_allowance_mm(self) -> float:
+        """Diametral allowance of a seat for a glued or pushed-in part. [mm]"""
+        return mm(self.si.fit_allowance)
+
+    @property
+    def running_clearance_mm(self) -> float:
+        """Diametral clearance between parts that turn on each other. [mm]"""
+        return mm(self.si.running_clearance)
+
+    @property
+    def backlash_mm(self) -> float:
+        """Circular backlash of a gear mesh at the pitch circle. [mm]"""
+        return mm(self.si.backlash)
+
+    @property
+    def build_volume_mm(self) -> tuple[float, float, float]:
+        """Usable build volume x, y, z. [mm]"""
+        x, y, z = self.si.build_volume
+        return mm(x), mm(y), mm(z)
+
+    @property
+    def hole_shrink_mm(self) -> float:
+        """How much smaller than drawn a small vertical hole prints (diametral). [mm]"""
+        return mm(self.si.hole_shrink)
+
+    @property
+    def material_density_kg_m3(self) -> float:
+        """Density of the printed material. [kg/m^3]"""
+        return self.si.density
+
+    @property
+    def linear_deflection_mm(self) -> float:
+        """Chord tolerance of the exported meshes. [mm]"""
+        return mm(self.si.linear_deflection)
+
+    @property
+    def angular_deflection_rad(self) -> float:
+        """Angular tolerance of the exported meshes. [rad]"""
+        return self.si.angular_deflection
 
 
-# FDM: 0.4 mm nozzle, two perimeters make the thinnest reliable wall (0.8 mm); Prusa MK4
-# build volume 250 x 210 x 220 mm.
-FDM = PrintProcess(
-    name="fdm",
-    printer="Prusa MK4 class (250 x 210 x 220 mm)",
-    min_wall_mm=0.8,
-    fit_allowance_mm=0.15,
-    running_clearance_mm=0.3,
-    backlash_mm=0.2,
-    build_volume_mm=(250.0, 210.0, 220.0),
-    material="PLA",
-    material_density_kg_m3=1240.0,
-)
-
-# Resin (SLA/MSLA): supported walls down to about 0.4 mm; Formlabs Form 3+ build volume
-# 145 x 145 x 185 mm.
-RESIN = PrintProcess(
-    name="resin",
-    printer="Formlabs Form 3+ class (145 x 145 x 185 mm)",
-    min_wall_mm=0.4,
-    fit_allowance_mm=0.05,
-    running_clearance_mm=0.1,
-    backlash_mm=0.1,
-    build_volume_mm=(145.0, 145.0, 185.0),
-    material="photopolymer",
-    material_density_kg_m3=1180.0,  # typical standard resin
-)
-
-PROCESSES: dict[str, PrintProcess] = {p.name: p for p in (FDM, RESIN)}
+PROCESSES: dict[str, CadProcess] = {n: CadProcess(p) for n, p in sorted(SI_PROCESSES.items())}
+"""The design's processes (:data:`design.process.PROCESSES`) in mm, by name (sorted)."""
+FDM, RESIN = PROCESSES["fdm"], PROCESSES["resin"]
 
 
-def get_process(process: str | PrintProcess) -> PrintProcess:
-    """Return the :class:`PrintProcess` named ``process`` (``"fdm"`` or ``"resin"``)."""
-    if isinstance(process, PrintProcess):
+def get_process(process: str | PrintProcess | CadProcess) -> CadProcess:
+    """The :class:`CadProcess` of ``process``: a name (``"fdm"`` or ``"resin"``), a
+    :class:`design.process.PrintProcess` or a :class:`CadProcess`."""
+    if isinstance(process, CadProcess):
         return process
+    if isinstance(process, PrintProcess):
+        return CadProcess(process)
     try:
         return PROCESSES[process]
     except KeyError:

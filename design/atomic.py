@@ -1,27 +1,72 @@
 """Atomic file writes: a temporary file beside the target, then a rename; and the clean-up
 of temporaries that a killed run left behind.
 
-A temporary is named ``.<target name>.<pid>.<8 random characters>.tmp``: the process id
-tells a later run whether its writer is still alive (:func:`remove_stale_temporaries`).
+A temporary is named ``.<target name>.<pid>.<8 random characters>.<proof>.tmp``: the process
+id tells a later run whether its writer is still alive, and the proof (an HMAC-SHA256 of
+the rest of the name under a key kept in the user's ringpair cache,
+:data:`KEY_FILE`) shows that ringpair wrote it. The clean-up
+(:func:`remove_stale_temporaries`) removes only temporaries with a valid proof whose
+writer is gone: a file that merely looks like a temporary (someone's own file, a
+temporary of another program or of another user's ringpair) is never touched.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
+import hmac
 import os
 import re
-import tempfile
+import secrets
+import stat
 from collections.abc import Iterator
 from pathlib import Path
 
-_TEMPORARY = re.compile(r"^\.(?P<target>.+?)(?:\.(?P<pid>\d+))?\.[a-z0-9_]{8}\.tmp$")
-"""A temporary of :func:`atomic_path` (older ones have no process id)."""
-_PLAIN_TEMPORARY = re.compile(r"^tmp[a-z0-9_]{8}\.tmp$")
-"""A temporary of ``tempfile.mkstemp(suffix='.tmp')``, as the Pareto points' store
-(a folder ``points``) writes them."""
+_TEMPORARY = re.compile(
+    r"^\.(?P<target>.+)\.(?P<pid>\d+)\.(?P<nonce>[a-z0-9_]{8})\.(?P<proof>[0-9a-f]{16})\.tmp$"
+)
+"""A temporary of :func:`atomic_path`."""
 DEPTH = 3
 """How deep below an output folder temporaries are looked for (ringpair writes at most
 ``OUT/pareto/points/``)."""
+KEY_FILE = "temporaries.key"
+"""The file in the ringpair cache (``$RINGPAIR_CACHE``, default ``~/.cache/ringpair``)
+holding the key that proves a temporary is ringpair's (created on first use, mode 0600)."""
+
+
+@functools.lru_cache(maxsize=4)
+def _key(cache: str) -> bytes:
+    """The user's temporaries key in ``cache``; a key of this process alone where none can
+    be kept (its temporaries then are never removed by a later run)."""
+    path = Path(cache) / KEY_FILE
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        except FileExistsError:
+            pass
+        else:
+            with os.fdopen(fd, "w") as f:
+                f.write(secrets.token_hex(32))
+        info = os.stat(path, follow_symlinks=False)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > 4096:
+            raise OSError("not a key file")
+        key = path.read_text(encoding="ascii").strip()
+        if len(key) < 32:
+            raise OSError("key too short")
+        return key.encode()
+    except (OSError, UnicodeDecodeError):
+        return secrets.token_bytes(32)
+
+
+def _cache() -> str:
+    return os.environ.get("RINGPAIR_CACHE", str(Path.home() / ".cache" / "ringpair"))
+
+
+def _proof(stem: str) -> str:
+    """The proof of ownership of a temporary named ``stem`` + ``.<proof>.tmp``."""
+    return hmac.new(_key(_cache()), stem.encode(), hashlib.sha256).hexdigest()[:16]
 
 
 @contextlib.contextmanager
@@ -33,15 +78,22 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     the temporary; the next run's :func:`remove_stale_temporaries` removes it.
     """
     target = Path(target)
+    with contextlib.suppress(FileNotFoundError):
+        mode = os.stat(target).st_mode
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):  # a folder fails in os.replace
+            raise FileExistsError(f"{target} is not a regular file; it is not replaced")
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp", dir=target.parent
-    )
-    os.close(fd)
-    tmp_path = Path(tmp)
+    while True:
+        stem = f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}"
+        tmp_path = target.parent / f"{stem}.{_proof(stem)}.tmp"
+        try:
+            os.close(os.open(tmp_path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            break
+        except FileExistsError:  # pragma: no cover - 2^32 names
+            continue
     try:
         yield tmp_path
-        os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
+        os.chmod(tmp_path, 0o666 & ~_umask())  # created 0600; give the usual mode
         os.replace(tmp_path, target)
     finally:
         if tmp_path.exists():
@@ -69,7 +121,8 @@ def remove_stale_temporaries(
         that writes one file). Default: every temporary in the tree (for a command that
         owns the folder).
 
-    A temporary whose writer is still running (its process id is alive) is kept, so two
+    Only temporaries that ringpair proves it wrote (their name's HMAC, see the module) are
+    removed; one whose writer is still running (its process id is alive) is kept, so two
     runs into the same folder do not break each other's writes.
     """
     root = Path(folder)
@@ -83,19 +136,27 @@ def remove_stale_temporaries(
             if len(Path(here).relative_to(root).parts) >= DEPTH:
                 subfolders.clear()
             candidates += [Path(here, n) for n in names if n.endswith(".tmp")]
-    removed = [path for path in candidates if path.is_file() and _stale(path, target)]
+    removed = [path for path in candidates if _stale(path, target)]
     for path in removed:
         path.unlink(missing_ok=True)
     return removed
 
 
 def _stale(path: Path, target: str | None) -> bool:
-    """Whether ``path`` is a temporary (of ``target``, if given) whose writer is gone."""
+    """Whether ``path`` is a regular file, a temporary ringpair proves it wrote (of
+    ``target``, if given), whose writer is gone."""
     match = _TEMPORARY.match(path.name)
-    if match is None:
-        plain = _PLAIN_TEMPORARY.match(path.name) is not None
-        return target is None and plain and path.parent.name == "points"
-    return (target is None or match["target"] == target) and not _alive(match["pid"])
+    if match is None or (target is not None and match["target"] != target):
+        return False
+    stem = path.name[: -len(f".{match['proof']}.tmp")]
+    if not hmac.compare_digest(_proof(stem), match["proof"]):
+        return False
+    try:
+        if not stat.S_ISREG(os.stat(path, follow_symlinks=False).st_mode):
+            return False
+    except OSError:
+        return False
+    return not _alive(match["pid"])
 
 
 def _glob_escape(name: str) -> str:

@@ -26,8 +26,18 @@ from design.geometry import (
     ring_centres,
     ring_clears_wire,
 )
-from design.mounting import DEFAULT_PROCESS, PROCESSES
-from design.records import Design, Environment, ExternalMagnet, Mounting, Robot, Tip, Tube
+from design.obstacles import KINDS, gaps, tip_body
+from design.process import DEFAULT_PROCESS, PROCESSES
+from design.records import (
+    Design,
+    Environment,
+    ExternalMagnet,
+    Mounting,
+    Obstacle,
+    Robot,
+    Tip,
+    Tube,
+)
 from design.registry import PARAMETERS, file_unit
 from design.suggest import did_you_mean
 from design.units import MM
@@ -138,7 +148,11 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
         raise DesignError(f"[{name}] must be a table of keys; got {node!r}")
     keys = {k.name: k for k in SECTIONS[name]}
     subsections = {s.split(".")[-1] for s in SECTIONS if s.startswith(name + ".")}
-    extra = {"external_magnet": {"shape"}, "tip.mounting": {"process"}}.get(name, set())
+    extra = {
+        "external_magnet": {"shape"},
+        "tip.mounting": {"process"},
+        "environment": {"obstacles"},
+    }.get(name, set())
     for given in node:
         if given not in keys and given not in subsections and given not in extra:
             allowed = set(keys) | subsections | extra
@@ -253,16 +267,94 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
     environment = Environment()
     if "environment" in doc:
         env = _section(doc, "environment")
-        environment = Environment(gravity=env.get("gravity_m_s2"))
+        obstacles = _obstacles(doc["environment"].get("obstacles", []))
+        environment = Environment(gravity=env.get("gravity_m_s2"), obstacles=obstacles)
 
     design = Design(name, robot, tip, ext, environment, description)
     _check_clearance(design)
+    _check_obstacles(design)
     return design
+
+
+OBSTACLE_KEYS = {"kind", "point_mm", "normal", "radius_mm", "friction"}
+
+
+def _obstacles(raw: Any) -> tuple[Obstacle, ...]:
+    """The ``[[environment.obstacles]]`` tables (docs/formats.md), checked. [SI]"""
+    if not isinstance(raw, list) or not all(isinstance(o, dict) for o in raw):
+        raise DesignError(
+            f"environment.obstacles must be an array of tables ([[environment.obstacles]]); "
+            f"got {raw!r}"
+        )
+    out = []
+    for i, node in enumerate(raw):
+        path = f"environment.obstacles[{i}]"
+        for given in node:
+            if given not in OBSTACLE_KEYS:
+                raise DesignError(
+                    f"unknown key {path}.{given}{did_you_mean(given, OBSTACLE_KEYS)}"
+                )
+        kind = node.get("kind")
+        if kind not in KINDS:
+            raise DesignError(f"{path}.kind must be one of {', '.join(KINDS)}; got {kind!r}")
+        needs = {"point_mm"} | ({"normal"} if kind != "sphere" else set())
+        needs |= {"radius_mm"} if kind != "plane" else set()
+        for key in sorted(needs):
+            if key not in node:
+                raise DesignError(f"missing key {path}.{key} (a {kind} needs {sorted(needs)})")
+        for key in sorted(set(node) - needs - {"kind", "friction"}):
+            raise DesignError(f"{path}.{key} does not apply to a {kind}; remove it")
+        anywhere = Key("point_mm", "a point", vector=True)
+        px, py, pz = _vector(f"{path}.point_mm", node["point_mm"], anywhere)
+        point = (px * MM, py * MM, pz * MM)
+        normal = (0.0, 0.0, 0.0)
+        if "normal" in node:
+            n = _vector(f"{path}.normal", node["normal"], Key("normal", "a direction", vector=True))
+            length = math.sqrt(sum(c * c for c in n))
+            if not length > 0:
+                raise DesignError(f"{path}.normal must be a non-zero vector; got {list(n)}")
+            normal = (n[0] / length, n[1] / length, n[2] / length)
+        radius = 0.0
+        if "radius_mm" in node:
+            positive = Key("radius_mm", "a radius", low=0.0, low_open=True)
+            radius = _number(f"{path}.radius_mm", node["radius_mm"], positive) * MM
+        friction = 0.0
+        if "friction" in node:
+            coefficient = Key("friction", "a Coulomb coefficient", low=0.0)
+            friction = _number(f"{path}.friction", node["friction"], coefficient)
+            if friction > 0:
+                raise DesignError(
+                    f"{path}.friction = {friction:g}: friction at obstacles is not modelled "
+                    "yet (contact is frictionless); remove it or set 0"
+                )
+        out.append(Obstacle(kind, point, normal, radius, friction))
+    return tuple(out)
+
+
+def _check_obstacles(design: Design) -> None:
+    """The straight, unloaded robot's tip (its printed body, the larger) must start
+    outside every obstacle, and a lumen must be wider than the tip."""
+    body = tip_body(design, printed=True)
+    rest = np.array([[design.robot.free_length, 0.0, 0.0]])
+    axis = np.array([[1.0, 0.0, 0.0]])
+    for i, o in enumerate(design.environment.obstacles):
+        path = f"environment.obstacles[{i}]"
+        if o.kind == "lumen" and o.radius <= body.radius:
+            raise DesignError(
+                f"{path}.radius_mm = {o.radius / MM:g} is narrower than the tip (radius "
+                f"{body.radius / MM:.4g} mm); expected a lumen wider than the tip"
+            )
+        gap = float(gaps(o, rest, axis, body)[0][0])
+        if not gap >= 0:
+            raise DesignError(
+                f"{path}: the straight robot's tip starts inside this {o.kind} (gap "
+                f"{gap / MM:.4g} mm); expected the tip outside it at rest"
+            )
 
 
 def _mounting(doc: dict[str, Any]) -> Mounting:
     """The optional ``[tip.mounting]`` section: ``process`` (a name of
-    :data:`design.mounting.PROCESSES`, default resin) sets the defaults of the wall, fit,
+    :data:`design.process.PROCESSES`, default resin) sets the defaults of the wall, fit,
     clearance and density keys."""
     node = doc["tip"].get("mounting", {})
     if not isinstance(node, dict):
@@ -352,9 +444,12 @@ def _file_units(x: float, scale: float) -> float:
     return x if scale == 1.0 else float(f"{x / scale:.12g}")
 
 
-def design_to_dict(design: Design) -> dict[str, Any]:
+def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
     """The design-file document (file units) of a :class:`Design`: every key of
-    :data:`SECTIONS`, optional keys only where they differ from their default."""
+    :data:`SECTIONS`, optional keys only where they differ from their default; with
+    ``explicit``, the ``[tip.mounting]`` section in full (process, wall, fits, density,
+    stops, pre-twist: a hand-off that does not lean on defaults a later version may
+    change)."""
     doc: dict[str, Any] = {"name": design.name}
     if design.description:
         doc["description"] = design.description
@@ -363,7 +458,7 @@ def design_to_dict(design: Design) -> dict[str, Any]:
     doc["external_magnet"] = {"shape": design.external_magnet.shape}
     mounting = design.tip.mounting
     defaults = Mounting.printed_by(mounting.process)
-    if mounting.process != DEFAULT_PROCESS:
+    if explicit or mounting.process != DEFAULT_PROCESS:
         doc["tip"]["mounting"] = {"process": mounting.process}
     for p in PARAMETERS.values():
         if p.key is None or p.field is None:
@@ -375,6 +470,8 @@ def design_to_dict(design: Design) -> dict[str, Any]:
         default = p.default
         if section == "tip.mounting":  # the process's value
             default = p.value(replace(design, tip=replace(design.tip, mounting=defaults)))
+            if explicit:
+                default = None
         if "[" not in p.field and default is not None and value == default:
             continue
         node = doc
@@ -384,14 +481,30 @@ def design_to_dict(design: Design) -> dict[str, Any]:
             node.setdefault(leaf, []).append(_file_units(value, file_unit(p.name)[1]))
         else:
             node[leaf] = _file_units(value, file_unit(p.name)[1])
+    if design.environment.obstacles:
+        doc.setdefault("environment", {})["obstacles"] = [
+            _obstacle_table(o) for o in design.environment.obstacles
+        ]
     return doc
 
 
-def dumps_design(design: Design) -> str:
-    """Design-file text of a :class:`Design`."""
-    return tomli_w.dumps(design_to_dict(design))
+def _obstacle_table(o: Obstacle) -> dict[str, Any]:
+    """One ``[[environment.obstacles]]`` table (file units) of an obstacle."""
+    table: dict[str, Any] = {"kind": o.kind, "point_mm": [_file_units(c, MM) for c in o.point]}
+    if o.kind != "sphere":
+        table["normal"] = [float(c) for c in o.normal]
+    if o.kind != "plane":
+        table["radius_mm"] = _file_units(o.radius, MM)
+    if o.friction:
+        table["friction"] = o.friction
+    return table
 
 
-def save_design(design: Design, path: str | os.PathLike[str]) -> None:
-    """Write a design file atomically."""
-    write_text(path, dumps_design(design))
+def dumps_design(design: Design, explicit: bool = False) -> str:
+    """Design-file text of a :class:`Design` (``explicit``: :func:`design_to_dict`)."""
+    return tomli_w.dumps(design_to_dict(design, explicit))
+
+
+def save_design(design: Design, path: str | os.PathLike[str], explicit: bool = False) -> None:
+    """Write a design file atomically (``explicit``: :func:`design_to_dict`)."""
+    write_text(path, dumps_design(design, explicit))

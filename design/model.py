@@ -149,6 +149,8 @@ class Symbols(dict):
             s["external_diameter"], s["external_length"], s["external_remanence"]
         )
         self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
+        self.applied_force = ca.vertcat(*(s[f"applied_force_{a}"] for a in "xyz"))
+        self.applied_moment = ca.vertcat(*(s[f"applied_moment_{a}"] for a in "xyz"))
         self.tip = tip_geometry(
             s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"],
             s["magnet_gap"], s["catheter_outer_diameter"], s["wire_outer_diameter"],
@@ -340,6 +342,8 @@ class RingPairModel:
             force, torque = tip_wrench(
                 field_model, tracked, frame, tip_angles, moment, s.magnet_spacing
             )
+            force = force + load * s.applied_force  # (an external wrench, 0 in a design)
+            torque = torque + load * s.applied_moment
             if printed:
                 torque = torque + offset * ca.cross(tangent, force)
             if "gravity" in effects:

@@ -24,8 +24,9 @@ sleeve wall, groove depth. So the outer diameter is
     D = max(D_m + fit + 2 w + c, catheter socket + 2 relief, wire chamber + 2 relief)
         + 2 (w + groove depth),
 
-with the wall ``w`` (:data:`WALL_FACTOR` times the process's thinnest reliable wall), the
-running clearance ``c`` and the fit allowance of the process (:data:`PROCESSES`).
+with the wall ``w``, the running clearance ``c`` and the fit allowance of the design's
+``tip.mounting`` (by default its process's, :data:`design.process.PROCESSES`: the wall
+:data:`~design.process.WALL_FACTOR` times the process's thinnest reliable wall).
 
 The rigid tip segment runs from the proximal piece's proximal face (where the catheter
 enters its socket: the flexible rod ends there) to the distal piece's far face. The
@@ -58,45 +59,6 @@ import casadi as ca
 import numpy as np
 
 from design.geometry import is_symbolic
-from design.units import MM
-
-
-@dataclass(frozen=True)
-class TipProcess:
-    """How the mounting pieces are printed, as far as their geometry must know.
-
-    name : ``"resin"`` or ``"fdm"``.
-    min_wall : Thinnest wall the process prints reliably. [m]
-    fit_allowance : Added to the diameter of a seat for a bought part that is glued or
-        pushed in (ring, catheter, wire). [m]
-    running_clearance : Diametral (and axial) clearance between parts that turn on each
-        other. [m]
-    density : Density of the printed material. [kg/m^3]
-    """
-
-    name: str
-    min_wall: float
-    fit_allowance: float
-    running_clearance: float
-    density: float
-
-    @property
-    def wall(self) -> float:
-        """The pieces' structural wall: :data:`WALL_FACTOR` times the process minimum. [m]"""
-        return WALL_FACTOR * self.min_wall
-
-
-WALL_FACTOR = 1.25
-"""Wall over the process's thinnest reliable wall: a quarter's margin. [-]"""
-
-# Resin (SLA/MSLA, Formlabs Form 3+ class): supported walls down to about 0.4 mm, glued fits
-# 0.05 mm over size, running fits 0.1 mm; standard photopolymer, 1180 kg/m^3.
-RESIN = TipProcess("resin", 0.4 * MM, 0.05 * MM, 0.1 * MM, 1180.0)
-# FDM (0.4 mm nozzle): two perimeters make the thinnest reliable wall, 0.8 mm; PLA.
-FDM = TipProcess("fdm", 0.8 * MM, 0.15 * MM, 0.3 * MM, 1240.0)
-PROCESSES: dict[str, TipProcess] = {p.name: p for p in (RESIN, FDM)}
-"""The print processes by name; the tip pieces default to resin (the finest)."""
-DEFAULT_PROCESS = "resin"
 
 KEY_ANGLE = math.radians(30.0)
 """Angular width of the stop key. [rad]"""
@@ -260,8 +222,8 @@ def tip_geometry(
     magnet_outer_diameter, magnet_inner_diameter, magnet_length, gap : the rings. [m]
     catheter_outer_diameter, wire_outer_diameter, catheter_inner_diameter : the
         transmissions bonded into the pieces. [m]
-    wall, fit_allowance, running_clearance, density : of the process
-        (:class:`TipProcess`). [m, m, m, kg/m^3]
+    wall, fit_allowance, running_clearance, density : of the print
+        (:class:`~design.records.Mounting`). [m, m, m, kg/m^3]
     stop_angle : relative rotation theta1 - theta2 the stops allow, from 0. [rad]
     groove_range : rotation each tracking groove reads (at most 2 pi). [rad]
     outer_diameter : the pieces' outer diameter; None: the smallest that holds every wall

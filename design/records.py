@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from design.geometry import magnet_spacing
-from design.mounting import DEFAULT_PROCESS, PROCESSES
+from design.process import DEFAULT_PROCESS, PROCESSES
 
 Vector3 = tuple[float, float, float]
 
@@ -52,7 +52,7 @@ class Robot:
 class Mounting:
     """The printed mounting pieces of the tip (:mod:`design.mounting`).
 
-    process : How they are printed, a name of :data:`design.mounting.PROCESSES`; it sets
+    process : How they are printed, a name of :data:`design.process.PROCESSES`; it sets
         the defaults of the next four.
     wall : The pieces' structural wall. [m]
     fit_allowance : Diametral allowance of a glued seat (ring, catheter, wire). [m]
@@ -75,7 +75,7 @@ class Mounting:
 
     @classmethod
     def printed_by(cls, process: str, **values: float) -> Mounting:
-        """The pieces printed by ``process`` (:data:`design.mounting.PROCESSES`), its wall,
+        """The pieces printed by ``process`` (:data:`design.process.PROCESSES`), its wall,
         fit, clearance and density unless ``values`` give them."""
         p = PROCESSES[process]
         numbers = {
@@ -134,10 +134,34 @@ class ExternalMagnet:
 
 
 @dataclass(frozen=True)
+class Obstacle:
+    """One rigid obstacle, base frame (:mod:`design.obstacles`).
+
+    kind : 'plane', 'sphere' or 'lumen'.
+    point : plane: a point on it; sphere: its centre; lumen: a point on its axis. [m]
+    normal : plane: the outward unit normal (the robot's side); lumen: the unit axis;
+        sphere: (0, 0, 0). [-]
+    radius : sphere, lumen (0 for a plane). [m]
+    friction : Coulomb coefficient (0: frictionless). [-]
+    """
+
+    kind: str
+    point: Vector3
+    normal: Vector3 = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    friction: float = 0.0
+
+
+@dataclass(frozen=True)
 class Environment:
-    """Optional surroundings. gravity : acceleration of gravity, base frame, or None. [m/s^2]"""
+    """Optional surroundings.
+
+    gravity : acceleration of gravity, base frame, or None. [m/s^2]
+    obstacles : rigid obstacles the tip may press on (none by default).
+    """
 
     gravity: Vector3 | None = None
+    obstacles: tuple[Obstacle, ...] = ()
 
 
 @dataclass(frozen=True)

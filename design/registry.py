@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from design.mounting import MAX_STOP_ANGLE, RESIN
+from design.mounting import MAX_STOP_ANGLE
+from design.process import RESIN
 from design.records import Design
 from design.units import DEG, GRAM, MM, MPA
 
@@ -54,7 +55,7 @@ class Parameter:
     field : where it lives in a :class:`~design.records.Design`, a dotted path of record
         attributes with a component index for vectors (``"tip.gap"``,
         ``"external_magnet.center[0]"``); None for a factor of the model alone (always 1
-        in a design, freed by calibration).
+        in a design, freed by calibration) or an applied load (``default``, 0).
     unit : its SI unit.
     key : its design-file key, ``section.key`` (vectors: one key for three parameters).
     low, high, low_open : the range a design file admits, in file units (None: unbounded).
@@ -78,8 +79,8 @@ class Parameter:
 
     def value(self, design: Design) -> float:
         """Its value in ``design``. [unit]"""
-        if self.field is None:
-            return 1.0
+        if self.field is None:  # a model factor (1), or an applied load (its default, 0)
+            return 1.0 if self.default is None else self.default
         path, i = _split(self.field)
         node: Any = design
         for part in path:
@@ -122,13 +123,24 @@ def _tube(tube: str, modulus_tolerance: float) -> list[Parameter]:
         one("outer_diameter", "m", "outer_diameter_mm", low=0.0, high=50.0, low_open=True),
         one("inner_diameter", "m", "inner_diameter_mm", low=0.0, high=50.0),
         one(
-            "youngs_modulus", "Pa", "youngs_modulus_mpa", low=0.0, high=1e6, low_open=True,
-            tolerance=("rel", modulus_tolerance), fit=_MODULUS_FIT,
+            "youngs_modulus",
+            "Pa",
+            "youngs_modulus_mpa",
+            low=0.0,
+            high=1e6,
+            low_open=True,
+            tolerance=("rel", modulus_tolerance),
+            fit=_MODULUS_FIT,
         ),
         one("poisson_ratio", "-", "poisson_ratio", low=-1.0, high=0.5, low_open=True),
         one("density", "kg/m^3", "density_kg_m3", low=0.0, high=30000.0, low_open=True),
         one(
-            "friction_angle", "rad", "friction_angle_deg", low=0.0, high=90.0, default=0.0,
+            "friction_angle",
+            "rad",
+            "friction_angle_deg",
+            low=0.0,
+            high=90.0,
+            default=0.0,
             fit=_FRICTION_FIT,
         ),
     ]
@@ -136,8 +148,14 @@ def _tube(tube: str, modulus_tolerance: float) -> list[Parameter]:
 
 _TABLE: list[Parameter] = [
     Parameter(
-        "free_length", "m", "clamped base to proximal ring centre", "robot.free_length",
-        "robot.free_length_mm", 0.0, 10000.0, True,
+        "free_length",
+        "m",
+        "clamped base to proximal ring centre",
+        "robot.free_length",
+        "robot.free_length_mm",
+        0.0,
+        10000.0,
+        True,
         fit=Fit("linear", 1e-3, 10.0, 5.0, MM, 0.05),
     ),
     # NiTi wire moduli spread less than extruded tubes' (5 % against 10 %)
@@ -145,74 +163,161 @@ _TABLE: list[Parameter] = [
     *_tube("wire", 0.05),
     # ground magnet rings hold +-0.02 mm; NdFeB grades spread 2 % in remanence
     Parameter(
-        "magnet_outer_diameter", "m", "ring outer diameter", "tip.magnet_outer_diameter",
-        "tip.magnet_outer_diameter_mm", 0.0, 100.0, True, tolerance=("abs", 0.02 * MM),
+        "magnet_outer_diameter",
+        "m",
+        "ring outer diameter",
+        "tip.magnet_outer_diameter",
+        "tip.magnet_outer_diameter_mm",
+        0.0,
+        100.0,
+        True,
+        tolerance=("abs", 0.02 * MM),
     ),
     Parameter(
-        "magnet_inner_diameter", "m", "ring inner diameter", "tip.magnet_inner_diameter",
-        "tip.magnet_inner_diameter_mm", 0.0, 100.0, tolerance=("abs", 0.02 * MM),
+        "magnet_inner_diameter",
+        "m",
+        "ring inner diameter",
+        "tip.magnet_inner_diameter",
+        "tip.magnet_inner_diameter_mm",
+        0.0,
+        100.0,
+        tolerance=("abs", 0.02 * MM),
     ),
     Parameter(
-        "magnet_length", "m", "ring length", "tip.magnet_length", "tip.magnet_length_mm",
-        0.0, 100.0, True, tolerance=("abs", 0.02 * MM),
+        "magnet_length",
+        "m",
+        "ring length",
+        "tip.magnet_length",
+        "tip.magnet_length_mm",
+        0.0,
+        100.0,
+        True,
+        tolerance=("abs", 0.02 * MM),
     ),
     Parameter(
-        "magnet_remanence", "T", "ring remanence", "tip.remanence", "tip.remanence_t",
-        0.0, 1.6, tolerance=("rel", 0.02), fit=_REMANENCE_FIT,
+        "magnet_remanence",
+        "T",
+        "ring remanence",
+        "tip.remanence",
+        "tip.remanence_t",
+        0.0,
+        1.6,
+        tolerance=("rel", 0.02),
+        fit=_REMANENCE_FIT,
     ),
     Parameter(
         "magnet_gap", "m", "face-to-face gap of the rings", "tip.gap", "tip.gap_mm", 0.0, 100.0
     ),
     Parameter(
-        "magnet_density", "kg/m^3", "ring density", "tip.density", "tip.density_kg_m3",
-        0.0, 30000.0, True,
+        "magnet_density",
+        "kg/m^3",
+        "ring density",
+        "tip.density",
+        "tip.density_kg_m3",
+        0.0,
+        30000.0,
+        True,
     ),
     Parameter(
-        "tip_mass", "kg", "extra mass at the proximal ring's centre (glue)", "tip.mass",
+        "tip_mass",
+        "kg",
+        "extra mass at the proximal ring's centre (glue)",
+        "tip.mass",
         "tip.mass_g",
-        0.0, 1000.0, default=0.0, fit=Fit("linear", 0.0, 0.5, 1.0, 1e-3),
+        0.0,
+        1000.0,
+        default=0.0,
+        fit=Fit("linear", 0.0, 0.5, 1.0, 1e-3),
     ),
     # the printed mounting pieces (design.mounting); process numbers default to resin's
     *[
         Parameter(
-            f"mount_{field}", unit, f"mounting pieces' {meaning}", f"tip.mounting.{field}",
-            f"tip.mounting.{key}", low, high, True, default=getattr(RESIN, field),
+            f"mount_{field}",
+            unit,
+            f"mounting pieces' {meaning}",
+            f"tip.mounting.{field}",
+            f"tip.mounting.{key}",
+            low,
+            high,
+            True,
+            default=getattr(RESIN, field),
         )
         for field, unit, meaning, key, low, high in (
             ("wall", "m", "wall", "wall_mm", 0.0, 20.0),
             ("fit_allowance", "m", "fit allowance of glued seats", "fit_allowance_mm", -1.0, 5.0),
             (
-                "running_clearance", "m", "running clearance", "running_clearance_mm",
-                0.0, 5.0,
+                "running_clearance",
+                "m",
+                "running clearance",
+                "running_clearance_mm",
+                0.0,
+                5.0,
             ),
             ("density", "kg/m^3", "material density", "density_kg_m3", 0.0, 30000.0),
         )
     ],
     Parameter(
-        "stop_angle", "rad", "stops: relative rotation theta1 - theta2 allowed, from 0",
-        "tip.mounting.stop_angle", "tip.mounting.stop_angle_deg", 0.0,
-        round(MAX_STOP_ANGLE / DEG, 9), True, default=np.pi,
+        "stop_angle",
+        "rad",
+        "stops: relative rotation theta1 - theta2 allowed, from 0",
+        "tip.mounting.stop_angle",
+        "tip.mounting.stop_angle_deg",
+        0.0,
+        round(MAX_STOP_ANGLE / DEG, 9),
+        True,
+        default=np.pi,
     ),
     Parameter(
-        "pretwist", "rad", "pre-twist: commanded offset of the wire against the catheter",
-        "tip.mounting.pretwist", "tip.mounting.pretwist_deg", -3600.0, 3600.0, default=0.0,
+        "pretwist",
+        "rad",
+        "pre-twist: commanded offset of the wire against the catheter",
+        "tip.mounting.pretwist",
+        "tip.mounting.pretwist_deg",
+        -3600.0,
+        3600.0,
+        default=0.0,
     ),
     Parameter(
-        "external_diameter", "m", "external cylinder diameter", "external_magnet.diameter",
-        "external_magnet.diameter_mm", 0.0, 10000.0, True,
+        "external_diameter",
+        "m",
+        "external cylinder diameter",
+        "external_magnet.diameter",
+        "external_magnet.diameter_mm",
+        0.0,
+        10000.0,
+        True,
     ),
     Parameter(
-        "external_length", "m", "external cylinder length", "external_magnet.length",
-        "external_magnet.length_mm", 0.0, 10000.0, True,
+        "external_length",
+        "m",
+        "external cylinder length",
+        "external_magnet.length",
+        "external_magnet.length_mm",
+        0.0,
+        10000.0,
+        True,
     ),
     Parameter(
-        "external_remanence", "T", "external magnet remanence", "external_magnet.remanence",
-        "external_magnet.remanence_t", 0.0, 1.6, tolerance=("rel", 0.02), fit=_REMANENCE_FIT,
+        "external_remanence",
+        "T",
+        "external magnet remanence",
+        "external_magnet.remanence",
+        "external_magnet.remanence_t",
+        0.0,
+        1.6,
+        tolerance=("rel", 0.02),
+        fit=_REMANENCE_FIT,
     ),
     # the external magnet is placed to +-1 mm, within 10 m of the robot
     *_vector(
-        "external_center", "m", "external magnet centre", "external_magnet.center",
-        "external_magnet.center_mm", low=-10000.0, high=10000.0, tolerance=("abs", 1 * MM),
+        "external_center",
+        "m",
+        "external magnet centre",
+        "external_magnet.center",
+        "external_magnet.center_mm",
+        low=-10000.0,
+        high=10000.0,
+        tolerance=("abs", 1 * MM),
         fit=_PLACEMENT_FIT,
     ),
     *_vector(
@@ -225,12 +330,20 @@ _TABLE: list[Parameter] = [
     ),
     # a lab, a centrifuge up to ten g
     *_vector(
-        "gravity", "m/s^2", "acceleration of gravity", "environment.gravity",
-        "environment.gravity_m_s2", low=-100.0, high=100.0,
+        "gravity",
+        "m/s^2",
+        "acceleration of gravity",
+        "environment.gravity",
+        "environment.gravity_m_s2",
+        low=-100.0,
+        high=100.0,
     ),
     *[
         Parameter(
-            name, "-", f"calibration factor on the {what} (1 = as designed)", None,
+            name,
+            "-",
+            f"calibration factor on the {what} (1 = as designed)",
+            None,
             fit=Fit("log", 1e-3, 1e3, prior),
         )
         for name, what, prior in (
@@ -240,7 +353,20 @@ _TABLE: list[Parameter] = [
         )
     ],
     Parameter("load_scale", "-", "multiplies every load (1 = physical; continuation)", None),
+    *[
+        Parameter(f"applied_{what}_{axis}", unit, f"{meaning}, {axis}", None, default=0.0)
+        for what, unit, meaning in (
+            ("force", "N", "force applied at the tracked point, base frame"),
+            ("moment", "N m", "moment applied about the tracked point, base frame"),
+        )
+        for axis in "xyz"
+    ],
 ]
+APPLIED_LOAD: tuple[str, ...] = tuple(
+    f"applied_{what}_{axis}" for what in ("force", "moment") for axis in "xyz"
+)
+"""An external wrench on the tip at the tracked point (0 in a design): the tip stiffness's
+derivative (:mod:`design.stiffness`), a contact force, a test's push. [N, N m]"""
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in _TABLE}
 NAMES: tuple[str, ...] = tuple(PARAMETERS)
@@ -296,9 +422,10 @@ FILE_UNITS: dict[str, tuple[str, float, str]] = {
 other units (T, -, kg/m^3, m/s^2) are used as they are."""
 
 RENAMED: dict[str, str] = {
-    **{f"ring_{q}": f"magnet_{q}" for q in (
-        "outer_diameter", "inner_diameter", "length", "gap", "remanence", "density"
-    )},
+    **{
+        f"ring_{q}": f"magnet_{q}"
+        for q in ("outer_diameter", "inner_diameter", "length", "gap", "remanence", "density")
+    },
     **{f"external_axis_{a}": f"external_magnetization_{a}" for a in "xyz"},
 }
 """Old name -> name (the tip's quantities were called ``ring_*`` and the external
@@ -325,7 +452,7 @@ def current(name: str) -> str:
     have it) the current one, with a FutureWarning that says so."""
     for old, new in RENAMED.items():
         if name == old or name.startswith(old + "_"):
-            now = new + name[len(old):]
+            now = new + name[len(old) :]
             warnings.warn(
                 f"'{name}' is now called '{now}'; the old name will stop working",
                 FutureWarning,

@@ -40,8 +40,7 @@ def parse_angles(text: str, option: str) -> np.ndarray:
         raise ValueError(f"{expected}, all finite; got {text!r}")
     if np.abs(values).max() > MAX_ABS_DEG:
         raise ValueError(
-            f"{option} angles must lie within +-{MAX_ABS_DEG:g} deg (a hundred turns); "
-            f"got {text!r}"
+            f"{option} angles must lie within +-{MAX_ABS_DEG:g} deg (a hundred turns); got {text!r}"
         )
     if values.size > MAX_ANGLES:
         raise ValueError(f"{option} gives {values.size} angles; at most {MAX_ANGLES} are allowed")

@@ -2,21 +2,40 @@
 :mod:`ringpair.commands`) and the console-script entry point.
 
 Exit codes: 0 done; 2 bad input (one message naming the key or option, no traceback);
-3 a stage or a printability check failed (``study``, ``cad``); 1 an unexpected failure.
+3 a stage or a printability check failed (``study``, ``cad``); 130 interrupted (Ctrl-C or
+SIGTERM); 1 an unexpected failure.
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
 import warnings
+from pathlib import Path
 
-import click
 
+def _interrupted_while_starting(signum: int, frame: object) -> None:
+    """Ctrl-C or SIGTERM before :func:`main` runs (while the libraries load): nothing was
+    written yet, so end at once, as :func:`main` would."""
+    sys.stderr.write("interrupted\n")
+    os._exit(130)
+
+
+if __name__ == "__main__" or Path(sys.argv[0]).name == "ringpair":  # the command, not a test
+    for _signal in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(_signal) is not signal.SIG_IGN:  # nohup, a shell's & keep theirs
+            signal.signal(_signal, _interrupted_while_starting)
+
+import click  # the imports below take seconds: after the early handler
+
+from design.processes import Interrupted, raise_on_signals
 from ringpair.commands.branch import branch
 from ringpair.commands.cad import cad
 from ringpair.commands.calibrate import calibrate
 from ringpair.commands.diagnose import diagnose
 from ringpair.commands.effects import effects
+from ringpair.commands.force import force
 from ringpair.commands.optimize import optimize
 from ringpair.commands.show import show
 from ringpair.commands.simulate import simulate
@@ -61,6 +80,7 @@ for _command in (
     calibrate,
     diagnose,
     effects,
+    force,
     optimize,
     show,
     simulate,
@@ -78,13 +98,26 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point. Ctrl-C and SIGTERM end the run with ``interrupted`` and
+    exit 130 (files written so far are whole; workers die with this process), without the
+    traceback of whatever was running (a Dask cluster shutting down says nothing)."""
     warnings.showwarning = _show_warning
+    raise_on_signals()
     try:
         cli.main(standalone_mode=True)
-    except KeyboardInterrupt:
+    except (Interrupted, KeyboardInterrupt):
+        _quiet()
         err_console.print("interrupted")
         sys.exit(130)
+
+
+def _quiet() -> None:
+    """Nothing more from the libraries while this process ends (Dask's clean-up logs
+    closed connections and cancelled tasks)."""
+    import logging
+
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 if __name__ == "__main__":

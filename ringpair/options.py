@@ -9,16 +9,18 @@ no traceback, nothing computed or written.
 Overwrite policy (:data:`OVERWRITE_POLICY`, in the commands' help): results (CSV, JSON,
 PNG, HTML, CAD files) are replaced on a rerun, each atomically; files that may be inputs
 someone edited (a design file from ``show --save``, measured data in ``synth --out``)
-are replaced only with ``--force``. No command deletes a file it did not write, except
-the temporaries an interrupted run of ringpair left behind.
+are replaced only with ``--force``. No command writes over one of its inputs, inside an
+input data set or onto a device, FIFO or socket. No command deletes a file it did not
+write, except the temporaries an interrupted run of ringpair left behind, and only those
+it proves are ringpair's (:mod:`design.atomic`).
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
 import re
+import stat
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -42,6 +44,7 @@ from design.atomic import remove_stale_temporaries
 from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, SWITCHES, RingPairModel, parse_effects
 from design.records import Design
+from design.strict_json import strict
 from ringpair.angles import parse_angles
 
 if TYPE_CHECKING:
@@ -181,17 +184,7 @@ MAX_CONFIGS = click.option(
 def json_text(doc: object) -> str:
     """``doc`` as strict JSON text, indented, with a final newline; NaN and infinities,
     which JSON does not have, become null."""
-    return json.dumps(_strict(doc), indent=2, allow_nan=False) + "\n"
-
-
-def _strict(x: object) -> object:
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _strict(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_strict(v) for v in x]
-    return x
+    return json.dumps(strict(doc)[0], indent=2, allow_nan=False) + "\n"
 
 
 def slug(name: str) -> str:
@@ -235,11 +228,13 @@ def output_path(
         command's default (the message then says so, rather than blame the option).
     replace : whether an existing file may be replaced (results); False asks for --force.
     files : the names the command writes inside the folder (each must not be a folder).
-    inputs : files the command reads; it never writes over one of them.
+    inputs : files and folders (data sets) the command reads; it never writes over one of
+        them nor anywhere inside an input folder.
 
     Raises UserError (exit 2) for a file where a folder is wanted or the reverse, a path
-    under a file, a place the user cannot write, a file name too long, a file that must
-    not be replaced and an input written over.
+    under a file, a device, FIFO or socket where a file is wanted, a place the user cannot
+    write, a file name too long, a file that must not be replaced, an input written over
+    and a place inside an input data set.
     """
     kind = "folder" if folder else "file"
     who = f"{option} {path}" if typed else f"the default output {kind} {path} (set with {option})"
@@ -257,15 +252,22 @@ def output_path(
             raise fail("is a symbolic link to nothing")
         if folder and path.exists() and not path.is_dir():
             raise fail("is a file; expected a folder")
+        given = [Path(i) for i in inputs if i is not None]
+        inside = next((i for i in given if i.is_dir() and _within(path, i)), None)
+        if inside is not None:
+            raise fail(f"is inside {inside}, a data set this command reads; write somewhere else")
         targets = [path / f for f in files] if folder else [path]
         for target in targets:
+            where = "" if target == path else f"{target} "
             if target.is_dir():
-                where = "" if target == path else f"{target} "
                 raise fail(f"{where}is a folder; expected a file name")
+            special = _special(target)
+            if special:
+                raise fail(f"{where}is {special}; expected a regular file (or a new name)")
             if target.exists() and not replace:
                 raise fail("exists; pass --force to replace it")
-            if any(i is not None and target.exists() and _same(target, i) for i in inputs):
-                raise fail("is an input of this command; writing there would destroy it")
+            if any(target.exists() and _same(target, i) for i in given):
+                raise fail(f"{where}is an input of this command; writing there would destroy it")
         existing = path if folder else path.parent
         while not existing.exists() and existing != existing.parent:
             existing = existing.parent
@@ -280,6 +282,30 @@ def output_path(
     except OSError as exc:
         raise fail(exc.strerror or str(exc)) from None
     return path
+
+
+def _within(path: Path, folder: Path) -> bool:
+    """Whether ``path`` is ``folder`` or below it (links resolved; ``path`` may not exist)."""
+    try:
+        return path.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError):
+        return False
+
+
+def _special(path: Path) -> str:
+    """What ``path`` is if it exists as neither a regular file nor a folder (a device, a
+    FIFO, a socket; links followed), else ''."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return ""
+    kinds = (
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+    )
+    return next((name for test, name in kinds if test(mode)), "")
 
 
 def _same(a: Path, b: Path) -> bool:
@@ -383,6 +409,11 @@ def study_from(path: Path | None) -> Study:
 
     with bad_input(StudyError, OSError, UnicodeDecodeError):
         return default_study() if path is None else load_study(path)
+
+
+def base_file(study: Study) -> Path | None:
+    """The base design file a study names (None for the embedded design): an input."""
+    return None if study.base_source == "embedded" else Path(study.base_source)
 
 
 def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements]:

@@ -1,7 +1,8 @@
 """The main job: a study file through every stage to a report, with a manifest.
 
-Stages (each a function of the study and earlier stages' results, timed, cached under
-``OUT/.stages/<stage>-<hash>.pkl`` so a rerun with the same inputs reuses it):
+Stages (each a function of the study and earlier stages' results, timed, stored under
+``OUT/.stages/<stage>-<hash>.npz`` (:mod:`design.stored`: JSON and NPZ, never code) so a
+rerun with the same inputs (:func:`inputs_key`) reuses it):
 
 1. ``baseline``: workspace of the starting design (the study's model);
 2. ``optimise``: the study's NLP (:func:`optimize.sizing.nlp.optimize_design`);
@@ -32,10 +33,10 @@ from __future__ import annotations
 
 import hashlib
 import json
-import pickle
 import platform
 import subprocess
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -44,16 +45,19 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from design.atomic import atomic_path, write_text
+from design import stored
+from design.atomic import write_text
 from design.designfile import save_design
 from design.equilibrium import solve_equilibria
 from design.geometry import disc_radius, rest_position
+from design.made import made_design
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
 from design.registry import PARAMETERS, file_key, index
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
+from ringpair.report_notes import rounding_note
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -149,21 +153,61 @@ class Run:
     """With measured data: what the study took from its diagnosis (:func:`calibrated_study`)."""
 
 
-def _key(*parts: object) -> str:
-    return hashlib.sha256(pickle.dumps(parts, protocol=4)).hexdigest()[:20]
+def inputs_key(study: Study, study_text: str, data: Path | None) -> str:
+    """Identity of everything a study's stages depend on: the study file's text, the study
+    as resolved (its base design's values included), the bytes of the base design file it
+    names, the measured data set's files (when given) and the code
+    (:func:`optimize.sizing.pareto.code_digest`: version and source). [-]"""
+    from optimize.sizing.pareto import code_digest
+
+    named = Path(study.base_source) if study.base_source != "embedded" else None
+    base_file = sha256(named) if named is not None and named.is_file() else None
+    data_files = _tree_hash(data) if data is not None else None
+    return stored.digest(study_text, study, base_file, data_files, code_digest())
+
+
+def _stored(run: Run, name: str, key: str) -> tuple[Any, float] | None:
+    """A stage's stored (result, seconds) for ``key``, or None: not stored, or stored but
+    foreign, truncated or altered (then with a warning, and the stage runs again)."""
+    from optimize.sizing.pareto import PACKAGES
+
+    path = _stage_path(run, name, key)
+    if not path.exists():
+        return None
+    try:
+        value = stored.load(path, key, PACKAGES)
+    except stored.StoredError as exc:
+        warnings.warn(
+            f"{path}: not reused ({exc}); stage '{name}' runs again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
+        warnings.warn(
+            f"{path}: not reused (not a stage result); stage '{name}' runs again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    return value["result"], float(value["seconds"])
+
+
+def _stage_path(run: Run, name: str, key: str) -> Path:
+    return run.out / ".stages" / f"{name}-{key[:20]}.npz"
 
 
 def _stage(
     run: Run, name: str, what: str, inputs: tuple, work: Callable[[], Any], watch: Watch
 ) -> Any:
-    """Run one stage, or reuse its stored result for the same inputs and the same code
-    (the key includes the git commit); a reused stage reports the seconds it took."""
-    code = versions().get("ringpair_commit", "unknown")
-    store = run.out / ".stages" / f"{name}-{_key(name, code, *inputs)}.pkl"
+    """Run one stage, or reuse its stored result for the same inputs (``inputs``, whose
+    first item is :func:`inputs_key`, and the stage's name); a reused stage reports the
+    seconds it took."""
+    key = stored.digest(name, *inputs)
     watch.start(what)
-    if store.exists():
-        with store.open("rb") as f:
-            result, seconds = pickle.load(f)
+    old = _stored(run, name, key)
+    if old is not None:
+        result, seconds = old
         run.reused[name] = True
     else:
         t0 = time.perf_counter()
@@ -172,8 +216,7 @@ def _stage(
         except Exception as exc:
             raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
         seconds = time.perf_counter() - t0
-        with atomic_path(store) as tmp, tmp.open("wb") as f:
-            pickle.dump((result, seconds), f, protocol=4)
+        stored.save(_stage_path(run, name, key), {"result": result, "seconds": seconds}, key)
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
@@ -366,9 +409,8 @@ def run_study(
 
     w = watch or _Unwatched()
     run = Run(out, study)
-    key: tuple[Any, ...] = (study_text,)
+    key: tuple[Any, ...] = (inputs_key(study, study_text, data),)
     if data is not None:  # the robot as built: design with the calibrated model
-        key = (*key, _tree_hash(data))
         what = "diagnosis of the measured data (the model the study designs with)"
         diagnosis = _stage(run, "diagnosis", what, key, lambda: _diagnose(data), w)
         study, run.calibration = calibrated_study(study, diagnosis["calibration"])
@@ -379,11 +421,13 @@ def run_study(
     what = "optimisation (IPOPT, multi-start)"
     best = _stage(run, "optimise", what, key, lambda: optimize_design(study), w)
     if not best.feasible or best.design is None:
-        raise StageError("optimise", "the study is infeasible: " + best.report())
-    chosen: Design = best.design
+        raise StageError("optimise", "the study is infeasible: " + best.report(), run)
+    # The hand-off: the optimum rounded to what can be made (design.made); the forward
+    # stage re-runs the model on it and on the raw optimum, and the report states the change.
+    chosen: Design = made_design(best.design)
     what = f"what each limit costs (each moved by {RELAX:.0%}, the NLP solved again)"
     _stage(run, "sensitivity", what, key, lambda: sensitivity(study, best), w)
-    save_design(chosen, out / BEST_DESIGN)
+    save_design(chosen, out / BEST_DESIGN, explicit=True)
     run.handoff.append(out / BEST_DESIGN)
     if study.pareto:
         pareto = _stage(
@@ -406,6 +450,7 @@ def run_study(
         lambda: {
             "start": sweep_workspace(study.base, model=faithful),
             "best": sweep_workspace(chosen, model=faithful),
+            "optimum": sweep_workspace(best.design, model=faithful),
             "start_controllable": steerable_disc(study.base, faithful),
             "best_controllable": steerable_disc(chosen, faithful),
         },
@@ -441,7 +486,6 @@ def run_study(
                 out / "cad",
                 cad_process,
                 render=render,
-                tip_process=chosen.tip.mounting.process,
             )
         ),
         w,
@@ -531,7 +575,7 @@ def headline(run: Run) -> str:
         f"({', '.join(sorted(forward_model(run.study).effects))}), against {start:.2f} mm "
         "for the starting "
         f"design ({best - start:+.2f} mm, {100 * (best / start - 1):+.0f} %). "
-        f"Design file: {run.out / BEST_DESIGN}{parts}."
+        f"{rounding_note(fwd)} Design file: {run.out / BEST_DESIGN}{parts}."
     )
 
 
@@ -542,6 +586,8 @@ def _cad_summary(report: Any) -> dict[str, Any]:
         "files": [str(p) for p in report.files],
         "checks": report.checks,
         "parts": report.parts,
+        "bom": report.bom,
+        "tip": report.tip,
         "passed": report.passed,
         "timings_s": report.timings_s,
     }
@@ -549,7 +595,7 @@ def _cad_summary(report: Any) -> dict[str, Any]:
 
 def _tree_hash(path: Path) -> str:
     files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-    return _key(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
+    return stored.digest(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
 
 
 def _diagnose(data: Path) -> dict[str, Any]:
@@ -569,10 +615,17 @@ def _diagnose(data: Path) -> dict[str, Any]:
 
 
 def write_manifest(
-    run: Run, study_path: Path | None, data: Path | None, seed: int, failed: str = ""
+    run: Run,
+    study_path: Path | None,
+    data: Path | None,
+    seed: int,
+    failed: str = "",
+    folder: dict[str, Any] | None = None,
 ) -> Path:
     """``manifest.json``: inputs with hashes, versions, seeds, stage timings, every file
-    (and the stage that failed, if one did: the files listed are those still valid)."""
+    (and the stage that failed, if one did: the files listed are those still valid);
+    ``folder``: what :mod:`ringpair.runs` says of the run's folder (an interrupted earlier
+    run, the stale files removed), under ``run``."""
     inputs: dict[str, Any] = {
         "study": {
             "path": str(study_path) if study_path else "embedded default study",
@@ -584,7 +637,10 @@ def write_manifest(
     files = sorted(
         p
         for p in run.out.rglob("*")
-        if p.is_file() and ".stages" not in p.parts and p.name != "manifest.json"
+        if p.is_file()
+        and ".stages" not in p.parts
+        and p.name != "manifest.json"
+        and not p.name.startswith(".ringpair")
     )
     doc = {
         "study": run.study.name,
@@ -592,6 +648,7 @@ def write_manifest(
         "versions": versions(),
         "seeds": {"tolerance": seed, "study": run.study.seed},
         "failed_stage": failed or None,
+        "run": folder or {},
         "stages": {
             name: {"seconds": run.seconds[name], "reused": run.reused[name]} for name in run.seconds
         },

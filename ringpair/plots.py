@@ -26,8 +26,7 @@ from design.workspace import Workspace  # noqa: E402
 from ringpair.tables import PARETO_UNITS, objective_in_report_units  # noqa: E402
 
 if TYPE_CHECKING:
-    from optimize.fitting.diagnose import Diagnosis
-    from optimize.fitting.diagnosis import Fit
+    from optimize.fitting.diagnose import Diagnosis, Fit
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.nlp import OptimizationResult
     from optimize.sizing.pareto import ParetoPoint, ParetoResult
@@ -248,6 +247,20 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("Tip deflection against ring angle")
+    _save(fig, path)
+
+
+def plot_force_map(grid_deg: np.ndarray, force_mn: np.ndarray, path: Path, title: str) -> None:
+    """The magnitude of the force the tip exerts on the obstacles [mN] over (theta1 rows,
+    theta2 columns) [deg]; blank where the tip does not press."""
+    fig, ax = plt.subplots(figsize=(6.0, 5.0))
+    shown = np.ma.masked_invalid(force_mn.T)
+    mesh = ax.pcolormesh(grid_deg, grid_deg, shown, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label="force on the obstacle [mN]")
+    ax.set_xlabel("theta1 (distal ring) [deg]")
+    ax.set_ylabel("theta2 (proximal ring) [deg]")
+    ax.set_title(title + "\n(blank: no contact)", fontsize=9)
+    ax.set_aspect("equal")
     _save(fig, path)
 
 

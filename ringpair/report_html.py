@@ -14,7 +14,6 @@ failed or tight ones expanded)."""
 from __future__ import annotations
 
 import html
-import json
 import re
 import shutil
 import subprocess
@@ -24,11 +23,19 @@ from typing import Any
 import numpy as np
 
 from design.atomic import atomic_path, write_text
-from design.model import RingPairModel
-from design.registry import file_key, file_unit
+from design.made import made_design
+from design.registry import PARAMETERS, file_key, file_unit
+from design.strict_json import dumps_strict
 from design.units import DEG, MM, MM3
 from ringpair.html_page import details, img, table, thumb
-from ringpair.pipeline import BEST_DESIGN, RELAX, TOLERANCES, Run, forward_model
+from ringpair.parts_report import bom_section, model_title, tip_card
+from ringpair.pipeline import (
+    BEST_DESIGN,
+    RELAX,
+    TOLERANCES,
+    Run,
+    forward_model,
+)
 from ringpair.plots import (
     binding,
     plot_fronts,
@@ -36,6 +43,7 @@ from ringpair.plots import (
     plot_tolerance,
     plot_workspaces,
 )
+from ringpair.report_notes import PDF_MARK, pdf_note, rounding_note, tolerance_words
 from ringpair.tables import (
     PARETO_UNITS,
     TIGHT,
@@ -74,9 +82,9 @@ def _mm(x: float) -> str:
 
 
 def model_names(run: Run) -> tuple[str, str]:
-    """The study's model and the model for design work, by name ('baseline' or the
-    effects joined by '+')."""
-    return RingPairModel(run.study.effects).name, forward_model(run.study).name
+    """The study's model and the model for design work, as a reader names them
+    (:func:`ringpair.parts_report.model_title`)."""
+    return model_title(run.study.effects), model_title(forward_model(run.study).effects)
 
 
 def front_notes(run: Run) -> dict[str, str]:
@@ -189,6 +197,10 @@ def results(run: Run) -> dict[str, Any]:
             "best_disc_radius_mm": best_ws.disc_radius / MM,
             "start_controllable_disc_radius_mm": fwd["start_controllable"] / MM,
             "best_controllable_disc_radius_mm": fwd["best_controllable"] / MM,
+            "unrounded_disc_radius_mm": fwd["optimum"].disc_radius / MM
+            if "optimum" in fwd
+            else None,
+            "rounding": rounding_note(fwd),
         },
         "tolerance": {
             "samples": int(len(tol)),
@@ -283,7 +295,7 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
             f"the model for design work ({html.escape(f['model'])})<br>start {fs:.2f} mm: "
             f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>{_steerable(f)}</div>"
         )
-    d = run.results["optimise"].design
+    d = made_design(run.results["optimise"].design)  # the hand-off, as best_design.toml
     cat, wire = doc["materials"]
     dims = (
         f"catheter{' ' + cat if cat else ''} Ø{_mm(d.robot.catheter.outer_diameter)}/"
@@ -295,9 +307,11 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
     )
     cards.append(
         f"<div class=card><b>Recommended design</b>: {html.escape(dims)}. "
+        f"{html.escape(f['rounding'])} "
         f"Design file <code>{BEST_DESIGN}</code>; parts in <code>cad/</code> "
-        f"(<code>parts.csv</code>).</div>"
+        f"(<code>parts.csv</code>, <code>bom.csv</code>).</div>"
     )
+    cards.append(tip_card(run.results.get("cad")))
     return f"<div class=cards>{''.join(cards)}</div>"
 
 
@@ -458,7 +472,8 @@ def _parts_section(run: Run) -> str:
 <p>{len(cad["checks"])} checks: {failed} failed; {len(shown)} shown below (failed, or within
 {TIGHT:.0%} of their limit).</p>
 {tight}
-{details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}"""
+{details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}
+{bom_section(cad)}"""
 
 
 def _cell(v: Any) -> str:
@@ -509,7 +524,10 @@ def write_report(run: Run) -> list[Path]:
     images = {p.stem: img(p, p.stem) for p in paths}
 
     t = doc["tolerance"]
-    tol_rows = [[k, f"{s:g}", kind] for k, (kind, s) in TOLERANCES.items()]
+    tol_rows = [
+        [PARAMETERS[k].meaning, tolerance_words(k, kind, sigma)]
+        for k, (kind, sigma) in TOLERANCES.items()
+    ]
     eff_rows = [
         [r["effect"], f"{r['max_shift_mm']:.2f}", f"{r['rms_shift_mm']:.2f}"]
         for r in doc["effects"]
@@ -537,6 +555,7 @@ def write_report(run: Run) -> list[Path]:
 {_question(run, doc)}
 {_answer(run, doc)}
 {_limits(doc)}
+<!--pdf-->
 </section>
 <h2 id="setup">Set-up</h2>
 <p>{html.escape(intro)} The study optimised with the {html.escape(doc["model"])} model;
@@ -554,7 +573,7 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
 {t["disc_radius_std_mm"]:.3f} mm standard deviation, 5-95 % range
 {t["disc_radius_p05_mm"]:.3f}-{t["disc_radius_p95_mm"]:.3f} mm.</p>
 {images["tolerance"]}
-{table(["parameter", "one sigma (SI or relative)", "kind"], tol_rows)}
+{table(["parameter", "one sigma"], tol_rows)}
 {_parts_section(run)}
 <h2 id="effects">Model effects (tip shift against the baseline, mm)</h2>
 {table(["effect", "max shift", "RMS shift"], eff_rows)}
@@ -564,15 +583,12 @@ and the optimum with the model for design work ({html.escape(work)}).</p>
 {table(["stage", "seconds"], timing_rows)}
 </body></html>
 """
-    write_text(out / "report.html", page)
-    write_text(out / "results.json", json.dumps(doc, indent=2, default=_json) + "\n")
+    write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(browser() is not None)))
+    write_text(out / "results.json", dumps_strict(doc))
     pdf = print_pdf(out / "report.html", out / "report.pdf")
+    if pdf is None and browser() is not None:  # Chromium is there but printed nothing
+        write_text(out / "report.html", page.replace(PDF_MARK, pdf_note(True, failed=True)))
     return [*paths, *([pdf] if pdf else []), out / "report.html", out / "results.json"]
-
-
-def _json(value: Any) -> Any:
-    """numpy scalars as numbers, anything else as its string."""
-    return float(value) if isinstance(value, np.floating | np.integer) else str(value)
 
 
 def browser() -> str | None:

@@ -18,11 +18,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from design.atomic import atomic_path, write_text
+from design.contact import Contact
 from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
 from design.model import RingPairModel, available_effects
 from design.records import Design
 from design.registry import PARAMETERS, file_unit
+from design.stiffness import TipStiffness
 from design.units import MM, MM3
 
 if TYPE_CHECKING:
@@ -47,13 +49,37 @@ POSE_COLUMNS = (
     "snapped",
     "multistable",
     "failure",
+    "stiffness_min_mN_per_mm",
+    "stiffness_max_mN_per_mm",
+    "in_contact",
+    "contact_x_mm",
+    "contact_y_mm",
+    "contact_z_mm",
+    "contact_force_x_mN",
+    "contact_force_y_mN",
+    "contact_force_z_mN",
 )
 
 
-def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
+def pose_rows(
+    eq: Equilibria,
+    rest: np.ndarray,
+    stiffness: TipStiffness | None = None,
+    contact: Contact | None = None,
+) -> list[dict]:
     """One row per configuration: commanded and tip ring angles [deg], tip [mm], tangent,
-    deflection from ``rest`` [mm], flags, and why a row has no state (empty pose cells)."""
+    deflection from ``rest`` [mm], flags, why a row has no state (empty pose cells), and
+    the tip stiffness's smallest and largest finite principal values (N/m = mN/mm; empty
+    without ``stiffness``); the contact with an obstacle: in_contact, the contact point [mm]
+    and the force the tip exerts on the obstacle [mN] (0 without contact)."""
     rows = []
+    nan = np.full(len(eq), np.nan)
+    lowest = nan if stiffness is None else stiffness.lowest
+    highest = nan if stiffness is None else stiffness.highest
+    n = len(eq)
+    touching = np.zeros(n, bool) if contact is None else contact.in_contact
+    point = np.full((n, 3), np.nan) if contact is None else contact.point / MM
+    pushed = np.zeros((n, 3)) if contact is None else contact.force * 1e3 + 0.0  # (no -0)
     commanded_deg = np.rad2deg(eq.command)
     tip_deg = np.rad2deg(eq.tip_angles)
     deflection = np.linalg.norm(eq.position - rest, axis=1) / MM
@@ -80,6 +106,15 @@ def pose_rows(eq: Equilibria, rest: np.ndarray) -> list[dict]:
                 "snapped": bool(eq.snapped[k]),
                 "multistable": bool(eq.multistable[k]),
                 "failure": str(eq.failure[k]) or ("" if posed else "no finite pose"),
+                "stiffness_min_mN_per_mm": float(lowest[k]),
+                "stiffness_max_mN_per_mm": float(highest[k]),
+                "in_contact": bool(touching[k]),
+                "contact_x_mm": float(point[k, 0]),
+                "contact_y_mm": float(point[k, 1]),
+                "contact_z_mm": float(point[k, 2]),
+                "contact_force_x_mN": float(pushed[k, 0]),
+                "contact_force_y_mN": float(pushed[k, 1]),
+                "contact_force_z_mN": float(pushed[k, 2]),
             }
         )
     return rows

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -13,15 +14,15 @@ SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
 
 @pytest.fixture(scope="session", autouse=True)
-def _compiled_model_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
-    """Keep compiled models out of the user's cache unless RINGPAIR_CACHE is set (to reuse
-    compilations across runs). Parallel workers (pytest-xdist) share one cache, beside their
-    own temporary folders, so that each model is compiled once per run."""
+def _compiled_model_cache() -> None:
+    """Keep compiled models out of the user's cache unless RINGPAIR_CACHE is set: they go
+    to one test cache in the system's temporary folder, shared by parallel workers
+    (pytest-xdist) and by later runs. A library is named by the hash of its C source,
+    compiler flags and CasADi version (:mod:`design.compiled`) and written by rename, so
+    runs of different code never share a wrong one; a fresh machine compiles each model
+    once per run, a developer's rerun compiles only what changed."""
     if "RINGPAIR_CACHE" not in os.environ:
-        root = tmp_path_factory.getbasetemp()
-        if os.environ.get("PYTEST_XDIST_WORKER"):
-            root = root.parent
-        cache = root / "ringpair-cache"
+        cache = Path(tempfile.gettempdir()) / f"ringpair-test-cache-{os.getuid()}"
         cache.mkdir(exist_ok=True)
         os.environ["RINGPAIR_CACHE"] = str(cache)
 

@@ -8,5 +8,6 @@ for the diagnosis benchmark, :mod:`optimize.fitting.planted` and
 the paper's grid in :mod:`optimize.fitting.paper_grid`), profile-likelihood intervals
 (:mod:`optimize.fitting.likelihood`) and model diagnosis (:mod:`optimize.fitting.diagnose`,
 residual structure in :mod:`optimize.fitting.structure`, the result and its JSON in
-:mod:`optimize.fitting.diagnosis`). SI units are used for all inputs and outputs.
+:mod:`optimize.fitting.diagnose.result`; :mod:`optimize.fitting.diagnosis` is its old
+name). SI units are used for all inputs and outputs.
 """

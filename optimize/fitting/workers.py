@@ -27,6 +27,7 @@ from multiprocessing.connection import Connection
 from typing import Any, Generic, TypeVar
 
 from design.compiled import use_threads
+from design.processes import die_with_parent
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -56,9 +57,10 @@ def worker_count() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def _start() -> None:
+def _start(parent: int) -> None:
     global _IN_WORKER
     _IN_WORKER = True
+    die_with_parent(parent)  # a killed run leaves no worker behind
     use_threads(1)  # the other workers keep the other cores busy
 
 
@@ -79,7 +81,9 @@ def parallel_map(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
     _JOB = (fn, items)
     try:
         context = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(n, mp_context=context, initializer=_start) as pool:
+        with ProcessPoolExecutor(
+            n, mp_context=context, initializer=_start, initargs=(os.getpid(),)
+        ) as pool:
             return list(pool.map(_call, range(len(items))))
     except BrokenProcessPool:
         return [fn(x) for x in items]
@@ -88,13 +92,13 @@ def parallel_map(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
 
 
 def _background(
-    fn: Callable[[Any], Any], items: Sequence[Any], claimed: Any, send: Connection
+    fn: Callable[[Any], Any], items: Sequence[Any], claimed: Any, send: Connection, parent: int
 ) -> None:
     """A background worker's work: each item not yet claimed (``claimed``: the items
     taken so far, shared), one after the other, until none are left; then their results,
     or None where anything failed (:meth:`Background.results` then runs them in its own
     process, where errors show)."""
-    _start()
+    _start(parent)
     try:
         out = []
         while True:
@@ -129,7 +133,9 @@ class Background(Generic[T, R]):
             self._claimed = context.Value("i", 0)
             self._receive, send = context.Pipe(duplex=False)
             self._process = context.Process(
-                target=_background, args=(fn, self.items, self._claimed, send), daemon=True
+                target=_background,
+                args=(fn, self.items, self._claimed, send, os.getpid()),
+                daemon=True,
             )
             self._process.start()
             send.close()

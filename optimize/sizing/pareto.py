@@ -5,26 +5,29 @@ above, external-magnet distance from below, :data:`optimize.sizing.studyfile.PAR
 maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points are
 independent, so they run as Dask tasks: on a local cluster (processes, one thread each)
 by default, or on an existing cluster given its scheduler address. Each finished point
-is stored under ``out_dir/points/`` keyed by a hash of the study and the point, so a rerun
-of the same inputs skips what is already solved; a point whose solve raises is stored as
-a failure with its message and does not stop the sweep.
+is stored under ``out_dir/points/`` (:mod:`design.stored`: JSON and NPZ, never code) keyed
+by a hash of the study, the point and the code, so a rerun of the same inputs skips what
+is already solved (a foreign, truncated or altered file is solved again, with a warning);
+a point whose solve raises is stored as a failure with its message and does not stop the
+sweep.
 
 SI units are used for all inputs and outputs.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
-import pickle
+import os
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from design.atomic import atomic_path
+from design import stored
+from design.processes import die_with_parent
 from optimize.sizing.nlp import OptimizationResult, optimize_design, pareto_values
 from optimize.sizing.studyfile import Study
 
@@ -69,10 +72,20 @@ class ParetoResult:
     workers: int
 
 
+PACKAGES = ("design", "optimize", "cad", "ringpair")
+"""The project's packages: a stored result may rebuild their dataclasses, and their source
+is part of every stored result's key (:func:`design.stored.source_digest`)."""
+
+
+def code_digest() -> str:
+    """Identity of the code that computes: the project's version and source. [-]"""
+    return stored.source_digest(PACKAGES, "ringpair")
+
+
 def point_key(study: Study, against: str, epsilon: float) -> str:
-    """Identity of one point's inputs: the study (every field) and the bound. [-]"""
-    blob = pickle.dumps((study, against, round(float(epsilon), 15)), protocol=4)
-    return hashlib.sha256(blob).hexdigest()[:24]
+    """Identity of one point's inputs: the study (every field, the resolved base design
+    included), the bound and the code (:func:`code_digest`). [-]"""
+    return stored.digest(study, against, round(float(epsilon), 15), code_digest())
 
 
 def _solve_point(
@@ -84,20 +97,33 @@ def _solve_point(
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _store(path: Path, point: ParetoPoint) -> None:
-    """Write one finished point atomically (a killed run leaves no half-written point; its
-    temporary, named after this process, is removed by the next run)."""
-    with atomic_path(path) as tmp, tmp.open("wb") as f:
-        pickle.dump(point, f, protocol=4)
+def _store(path: Path, point: ParetoPoint, key: str) -> None:
+    """Write one finished point atomically (:func:`design.stored.save`: data, no pickle)."""
+    stored.save(path, point, key)
 
 
-def _load(path: Path) -> ParetoPoint | None:
-    try:
-        with path.open("rb") as f:
-            point = pickle.load(f)
-    except (OSError, pickle.UnpicklingError, EOFError, AttributeError):
+def _load(path: Path, key: str) -> ParetoPoint | None:
+    """The point stored at ``path`` for ``key``; None (with a warning when a file is there
+    but foreign, truncated or altered: the point is then solved again)."""
+    if not path.exists():
         return None
-    return point if isinstance(point, ParetoPoint) else None
+    try:
+        point = stored.load(path, key, PACKAGES)
+    except stored.StoredError as exc:
+        warnings.warn(
+            f"{path}: not reused ({exc}); the point is solved again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    if not isinstance(point, ParetoPoint):
+        warnings.warn(
+            f"{path}: not reused (not a Pareto point); the point is solved again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    return point
 
 
 def run_sweeps(
@@ -118,14 +144,15 @@ def run_sweeps(
 
     t0 = time.perf_counter()
     store = Path(out_dir) / POINTS
-    plan = [
-        (s.against, float(e), store / f"{point_key(study, s.against, e)}.pkl")
+    keys = {
+        (s.against, float(e)): point_key(study, s.against, e)
         for s in study.pareto
         for e in pareto_values(study, s)
-    ]
+    }
+    plan = [(a, e, store / f"{k[:24]}.npz") for (a, e), k in keys.items()]
     done: dict[Path, ParetoPoint] = {}
-    for _, _, path in plan:
-        old = _load(path) if path.exists() else None
+    for a, e, path in plan:
+        old = _load(path, keys[a, e])
         if old is not None:
             done[path] = ParetoPoint(old.against, old.epsilon, old.result, old.error, True)
     total, resumed = len(plan), len(done)
@@ -150,6 +177,8 @@ def run_sweeps(
         try:
             with Client(cluster if cluster is not None else scheduler) as client:
                 used = len(client.scheduler_info()["workers"])
+                if cluster is not None:  # our workers die with this process (kill -9)
+                    client.run(die_with_parent, os.getpid())
                 futures = {
                     client.submit(_solve_point, study, a, e, pure=False): (a, e, p)
                     for a, e, p in todo
@@ -158,7 +187,7 @@ def run_sweeps(
                     a, e, path = futures[future]
                     result, error = future.result()
                     point = ParetoPoint(a, e, result, error)
-                    _store(path, point)
+                    _store(path, point, keys[a, e])
                     done[path] = point
                     if progress:
                         progress(len(done), total)

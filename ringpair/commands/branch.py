@@ -58,7 +58,13 @@ def branch(
     command = np.deg2rad([one_angle(theta1, "--theta1"), one_angle(theta2, "--theta2")])
     lam = np.linspace(0.0, 1.0, points)
     typed = out is not None
-    out = output_path(out or default_out(d.name, "branch.png"), "--out", folder=False, typed=typed)
+    out = output_path(
+        out or default_out(d.name, "branch.png"),
+        "--out",
+        folder=False,
+        typed=typed,
+        inputs=[design],
+    )
     with progress("following the branches (the first run on a machine compiles)"):
         path_states, others = branches(model, model.parameters(d), command, lam)
     title = (

@@ -32,7 +32,9 @@ from ringpair.options import (
     type=click.Choice(["fdm", "resin"]),
     default="fdm",
     show_default=True,
-    help="Printing process: sets fit allowances, clearances, minimum wall and build volume.",
+    help="Printing process of the actuator's parts: sets fit allowances, clearances, minimum "
+    "wall and build volume. The two tip pieces are printed as the design file's "
+    "[tip.mounting] says (resin by default), the pieces the model carries.",
 )
 @click.option("--no-render", is_flag=True, help="Skip the pyvista renders (faster).")
 def cad(design: Path | None, out: Path | None, process: str, no_render: bool) -> None:
@@ -46,7 +48,9 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
     """
     d = design_from(design)
     typed = out is not None
-    out = output_path(out or default_out(d.name, "cad"), "--out", folder=True, typed=typed)
+    out = output_path(
+        out or default_out(d.name, "cad"), "--out", folder=True, typed=typed, inputs=[design]
+    )
     from cad import CadError, build_parts  # after the inputs are checked: CAD loads slowly
 
     with progress("building, exporting, checking and rendering parts"), bad_input(CadError):

@@ -54,7 +54,13 @@ def effects(
     models = len(available_effects()) + 2  # the baseline, each effect, all of them
     check_configurations(t1.size * t2.size, max_configs, "--theta1 and --theta2", solves=models)
     typed = out is not None
-    out = output_path(out or default_out(d.name, "effects.csv"), "--out", folder=False, typed=typed)
+    out = output_path(
+        out or default_out(d.name, "effects.csv"),
+        "--out",
+        folder=False,
+        typed=typed,
+        inputs=[design],
+    )
     with progress("comparing model effects (first use compiles each model)"):
         rows, base_max = effect_shifts(d, t1, t2)
     table = Table(

@@ -20,6 +20,7 @@ from ringpair.options import (
     SCHEDULER,
     STUDY,
     UserError,
+    base_file,
     console,
     default_out,
     json_text,
@@ -72,6 +73,7 @@ def optimize(
         folder=True,
         typed=out is not None,
         files=FILES,
+        inputs=[study_path, base_file(study)],
     )
     with progress(f"solving '{study.name}' ({study.starts} starts per material)"):
         best = optimize_design(study)

@@ -26,7 +26,7 @@ def show(design: Path | None, save: Path | None, force: bool) -> None:
     """Validate DESIGN and print it with its derived quantities."""
     d = design_from(design)
     if save is not None:
-        output_path(save, "--save", folder=False, replace=force)
+        output_path(save, "--save", folder=False, replace=force, inputs=[design])
     t, r, e = d.tip, d.robot, d.external_magnet
     table = Table(title=f"design '{d.name}'", show_header=True)
     table.add_column("quantity")

@@ -9,12 +9,17 @@ import click
 import numpy as np
 from rich.table import Table
 
-from design.equilibrium import solve_design
+from design.contact import Contact, solve_design_in_contact
+from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
+from design.model import RingPairModel
+from design.records import Design
+from design.stiffness import TipStiffness, tip_stiffness
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
     OVERWRITE_POLICY,
+    UserError,
     angle_option,
     angles,
     check_configurations,
@@ -47,8 +52,7 @@ memory bound: rows go to the CSV chunk by chunk)."""
 @angle_option(
     "--theta2",
     "0",
-    "Proximal ring (catheter) angles [deg], same forms. Every pair of the two "
-    "lists is simulated.",
+    "Proximal ring (catheter) angles [deg], same forms. Every pair of the two lists is simulated.",
 )
 @path_option(
     "--out",
@@ -89,10 +93,18 @@ def simulate(
     theta2_deg, the tip ring angles, x_mm, y_mm, z_mm (tip, base frame), the tip tangent,
     deflection_mm (from the straight tip), converged, stable, snapped (the robot jumped to
     another branch on the way), multistable (another stable state exists at that command),
-    failure (why a row has no state; its pose cells are then empty and converged = false).
+    failure (why a row has no state; its pose cells are then empty and converged = false),
+    stiffness_min_mN_per_mm and stiffness_max_mN_per_mm (the tip's smallest and largest
+    principal stiffness at the tracked point, magnetic stiffness included; an inextensible
+    rod's axis, along which the model's tip does not give, is left out).
     """
     d = design_from(design)
     model = model_from(effects)
+    if ordered and d.environment.obstacles:
+        raise UserError(
+            "--ordered: a driven path in contact with environment.obstacles is not followed "
+            "yet; simulate the configurations on their own (without --ordered)"
+        )
     t1 = angles(theta1, "--theta1")
     t2 = angles(theta2, "--theta2")
     n = t1.size * t2.size
@@ -116,15 +128,8 @@ def simulate(
     with progress(solving, total=n) as update, csv_writer(out, POSE_COLUMNS, header) as put:
         for start in range(0, n, step):
             chunk = commanded[start : start + step]
-            eq = solve_design(
-                d,
-                chunk[:, 0],
-                chunk[:, 1],
-                model,
-                ordered,
-                multistable=not (ordered or no_multistable),
-            )
-            rows = pose_rows(eq, rest)
+            eq, stiffness, contact = _states(d, chunk, model, ordered, not no_multistable)
+            rows = pose_rows(eq, rest, stiffness, contact)
             put(rows)
             head += rows[: SHOWN - len(head)]
             tail.extend(rows)
@@ -134,11 +139,19 @@ def simulate(
         shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
         _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)")
     if failures:
-        warn(
-            f"{failures.total()} configuration(s) have no state: "
-            + "; ".join(sorted(failures))
-        )
+        warn(f"{failures.total()} configuration(s) have no state: " + "; ".join(sorted(failures)))
     console.print(f"wrote {out} ({n} configurations)")
+
+
+def _states(
+    d: Design, chunk: np.ndarray, model: RingPairModel, ordered: bool, multistable: bool
+) -> tuple[Equilibria, TipStiffness, Contact | None]:
+    """The states of the configurations ``chunk`` (M, 2) [rad], their tip stiffness and,
+    with the design's obstacles, their contact (the stiffness then held on the obstacle)."""
+    if ordered:
+        eq = solve_design(d, chunk[:, 0], chunk[:, 1], model, ordered=True)
+        return eq, tip_stiffness(model, model.parameters(d), eq), None
+    return solve_design_in_contact(d, model, chunk[:, 0], chunk[:, 1], multistable=multistable)
 
 
 def _print_rows(shown: list[dict], n: int, title: str) -> None:

@@ -25,12 +25,14 @@ from rich.progress import (
 )
 from rich.text import Text
 
+from optimize.sizing.studyfile import Study
 from ringpair.options import (
     OVERWRITE_POLICY,
     SCHEDULER,
     STUDY,
     UserError,
     bad_input,
+    base_file,
     console,
     default_out,
     err_console,
@@ -38,7 +40,9 @@ from ringpair.options import (
     path_option,
     print_error,
     study_from,
+    warn,
 )
+from ringpair.runs import RunFolder
 
 FILES = ("report.html", "results.json", "manifest.json", "best_design.toml")
 """What ``study`` writes in its folder besides each stage's files."""
@@ -161,8 +165,7 @@ def study(
 
     Exit codes: 0 done; 2 bad input; 3 a stage failed (named, with what was written).
     """
-    from ringpair.pipeline import StageError, headline, run_study, write_manifest
-    from ringpair.report_html import write_report
+    from ringpair.runs import FolderBusy, run_folder
 
     with bad_input(OSError, UnicodeDecodeError):
         text = study_path.read_text() if study_path else ""
@@ -173,10 +176,66 @@ def study(
         raise UserError(f"--samples must be at least 2; got {samples}")
     process = _process(process)
     out = output_path(
-        out or default_out(s.name), "--out", folder=True, typed=out is not None, files=FILES
+        out or default_out(s.name),
+        "--out",
+        folder=True,
+        typed=out is not None,
+        files=FILES,
+        inputs=[study_path, base_file(s), data],
     )
-    out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
+    try:
+        with run_folder(out, "study") as folder:
+            _run(
+                s,
+                out,
+                folder,
+                study_path,
+                text,
+                data,
+                workers,
+                scheduler,
+                samples,
+                seed,
+                process,
+                no_render,
+                t0,
+            )
+    except FolderBusy as exc:
+        raise UserError(f"--out {out}: {exc}") from None
+
+
+def _run(
+    s: Study,
+    out: Path,
+    folder: RunFolder,
+    study_path: Path | None,
+    text: str,
+    data: Path | None,
+    workers: int,
+    scheduler: str | None,
+    samples: int,
+    seed: int,
+    process: str,
+    no_render: bool,
+    t0: float,
+) -> None:
+    """The study in its held folder ``folder`` (:func:`ringpair.runs.run_folder`)."""
+    from ringpair.pipeline import StageError, headline, run_study, write_manifest
+    from ringpair.report_html import write_report
+
+    if folder.interrupted is not None:
+        warn(
+            f"the previous run into {out} was interrupted; its files are replaced, and "
+            "those of its that this run does not write again are removed"
+        )
+
+    def about() -> dict[str, object]:
+        return {
+            "previous_run_interrupted": folder.interrupted is not None,
+            "removed_stale": folder.removed,
+        }
+
     try:
         with _stages() as stages:
             run = run_study(
@@ -192,6 +251,7 @@ def study(
                 render=not no_render,
                 watch=stages,
             )
+            folder.remove_stale([n for n, r in run.reused.items() if r])
             stages.start(REPORT)
             t1 = time.perf_counter()
             written = write_report(run)
@@ -199,13 +259,16 @@ def study(
     except StageError as exc:
         print_error(str(exc))
         if exc.run is not None:
-            manifest = write_manifest(exc.run, study_path, data, seed, failed=exc.stage)
+            folder.remove_stale([n for n, r in exc.run.reused.items() if r])
+            manifest = write_manifest(
+                exc.run, study_path, data, seed, failed=exc.stage, folder=about()
+            )
             done = ", ".join(exc.run.seconds) or "none"
             err_console.print(
                 f"stages finished before it: {done}; their files are listed in {manifest}"
             )
         sys.exit(3)
-    manifest = write_manifest(run, study_path, data, seed)
+    manifest = write_manifest(run, study_path, data, seed, folder=about())
     pdf = [str(p) for p in written if p.suffix == ".pdf"] or [
         "no PDF (headless Chromium, Debian package 'chromium', is not installed)"
     ]

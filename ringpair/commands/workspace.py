@@ -12,6 +12,7 @@ from design.atomic import write_text
 from design.controllable import Controllable, controllable_workspace
 from design.equilibrium import solve_design
 from design.records import Design
+from design.stiffness import tip_stiffness
 from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from ringpair.options import (
@@ -19,6 +20,7 @@ from ringpair.options import (
     MAX_CONFIGS,
     OVERWRITE_POLICY,
     FloatRange,
+    UserError,
     check_configurations,
     console,
     default_out,
@@ -76,6 +78,11 @@ def workspace(
     from ringpair.plots import plot_controllable, write_workspace_plots
 
     d = design_from(design)
+    if d.environment.obstacles:
+        raise UserError(
+            "workspace: the full-turn map with environment.obstacles is not made yet; "
+            "`ringpair simulate` solves configurations pressed on them"
+        )
     model = model_from(effects)
     check_configurations(len(angle_grid(np.deg2rad(step))) ** 2, max_configs, "--step")
     out = output_path(
@@ -84,6 +91,7 @@ def workspace(
         folder=True,
         typed=out is not None,
         files=FILES,
+        inputs=[design],
     )
     with progress("sweeping the workspace"):
         ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
@@ -95,7 +103,7 @@ def workspace(
         )
     write_csv(
         out / "workspace.csv",
-        pose_rows(ws.grid, ws.rest_position),
+        pose_rows(ws.grid, ws.rest_position, tip_stiffness(model, model.parameters(d), ws.grid)),
         POSE_COLUMNS,
         header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
     )

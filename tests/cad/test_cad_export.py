@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from cad.build import CadReport
+from cad.build import TIP_PIECES, CadReport
 from cad.checks import COLUMNS
+from cad.process import FDM, PROCESSES, RESIN
 
 NS = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
 
@@ -27,6 +28,10 @@ def test_step_assembly_has_named_parts_in_millimetres(fdm_build: CadReport) -> N
     names = {child.name for child in back.children}
     expected = {inst.name for inst in fdm_build.assembly.instances}
     assert names == expected
+    # Each instance is its own product, named as it is (issue 52: the distal ring arrived
+    # in FreeCAD as ring_magnet_proximal001, a copy of the first instance's product).
+    products = re.findall(r"PRODUCT\('([^']*)'", text)
+    assert sorted(products) == sorted([*expected, "ringpair_robot"])
     # Read-back geometry is in mm: the housing keeps its modelled size.
     housing = next(c for c in back.children if c.name == "housing")
     bb = housing.toCompound().BoundingBox()
@@ -48,11 +53,12 @@ def test_stl_per_printed_part_is_watertight_with_the_cad_volume(fdm_build: CadRe
 
 
 def test_3mf_plate_holds_every_copy_on_the_bed(fdm_build: CadReport) -> None:
-    plates = sorted(fdm_build.out_dir.glob("plate_fdm_*.3mf"))
-    assert plates
+    # The actuator's plates are FDM; the tip pieces are printed as the design says (resin).
+    plates = sorted(fdm_build.out_dir.glob("plate_*.3mf"))
+    assert {p.name.split("_")[1] for p in plates} == {"fdm", "resin"}
     copies: dict[str, int] = {}
-    bed = np.array([250.0, 210.0])
     for plate in plates:
+        bed = np.array(PROCESSES[plate.name.split("_")[1]].build_volume_mm[:2])
         with zipfile.ZipFile(plate) as z:
             assert "[Content_Types].xml" in z.namelist()
             model = ElementTree.fromstring(z.read("3D/3dmodel.model"))
@@ -94,9 +100,14 @@ def test_check_table_is_written_and_all_pass_for_the_demonstrator(fdm_build: Cad
     } <= kinds
     failed = [r for r in rows if r["passed"] != "True"]
     assert failed == []
-    # Every printed part is checked against the FDM minimum wall.
-    walls = {r["item"]: float(r["value"]) for r in rows if r["check"] == "min_wall"}
-    assert len(walls) == 12 and min(walls.values()) >= 0.8
+    # Every printed part is checked against its process's minimum wall: the actuator's
+    # FDM, the tip pieces the design's (resin).
+    walls = {r["item"]: r for r in rows if r["check"] == "min_wall"}
+    assert len(walls) == 12
+    for name, r in walls.items():
+        process = RESIN if name in TIP_PIECES else FDM
+        assert f"({process.name})" in r["limit"], name
+        assert float(r["value"]) >= process.min_wall_mm, name
 
 
 def test_outputs_are_complete_and_no_temporary_file_is_left(fdm_build: CadReport) -> None:

@@ -219,7 +219,7 @@ def build_reports(d: MountingDims, spec: MountingSpec):
     """The tracking reports of pieces with dimensions ``d`` (no solids needed)."""
     from cad.mounting import MountingPieces
 
-    return MountingPieces(None, None, d, spec, None).tracking()  # type: ignore[arg-type]
+    return MountingPieces(None, None, d, spec, None, None, None).tracking()  # type: ignore[arg-type]
 
 
 @pytest.fixture(scope="module")
@@ -274,6 +274,6 @@ def test_tip_assembly_extent_is_the_rigid_segment(demonstrator: Design, resin_pi
 
 
 def test_pieces_state_their_walls_clearances_and_readout(resin_pieces) -> None:
-    text = "\n".join(resin_pieces.describe(RESIN))
+    text = "\n".join(resin_pieces.describe())
     for words in ("resin", "wall 0.5 mm", "running clearance 0.1 mm", "mm per deg", "180 deg"):
         assert words in text

@@ -248,14 +248,14 @@ def test_strides_on_smooth_stretches_give_the_states_of_single_sub_steps(monkeyp
     change faster it goes back to 1-degree sub-steps. On the bench path of a soft rod with
     twisting transmissions (which snaps), the states and the snaps are those of 1-degree
     steps all the way."""
-    import design.equilibrium as equilibrium
+    import design.equilibrium.settings as equilibrium_settings
     from optimize.fitting.synth import default_commands
 
     model = RingPairModel(frozenset({"torsion", "large_deflection"}))
     params = set_params(model.parameters(DEMO), bending_rigidity_scale=0.3)
     cmd = default_commands(60)
     strided = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
-    monkeypatch.setattr(equilibrium, "MAX_STRIDE", 1)
+    monkeypatch.setattr(equilibrium_settings, "MAX_STRIDE", 1)
     single = solve_sequence(model, params, cmd[:, 0], cmd[:, 1])
     assert single.snapped.any() and single.stable.all()
     np.testing.assert_array_equal(strided.snapped, single.snapped)

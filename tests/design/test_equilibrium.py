@@ -134,14 +134,14 @@ def test_antialigned_rings_lose_stability_at_2mB_equal_EI_over_L(effects):
 
 def test_unconverged_configurations_are_flagged_and_never_numbers(demonstrator, monkeypatch):
     # An unattainable tolerance: nothing may be reported as converged, every pose is NaN.
-    monkeypatch.setattr(equilibrium, "TOLERANCE", 0.0)
+    monkeypatch.setattr(equilibrium.settings, "TOLERANCE", 0.0)
     eq = solve_design(demonstrator, np.linspace(0, 3, 5), 0.0)
     assert not eq.converged.any() and not eq.stable.any()
     assert np.isnan(eq.position).all() and np.isnan(eq.frame).all()
 
 
 def test_batch_equals_one_by_one_across_chunks(demonstrator, monkeypatch):
-    monkeypatch.setattr(equilibrium, "CHUNK", 7)  # several chunks and a padded last one
+    monkeypatch.setattr(equilibrium.settings, "CHUNK", 7)  # several chunks and a padded last one
     rng = np.random.default_rng(3)
     t1, t2 = rng.uniform(0, 2 * np.pi, (2, 23))
     batch = solve_design(demonstrator, t1, t2)

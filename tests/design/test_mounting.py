@@ -13,13 +13,12 @@ import pytest
 from design.designfile import default_design
 from design.model import Symbols
 from design.mounting import (
-    FDM,
     PITCH_PER_WIDTH,
-    RESIN,
     TipGeometry,
     design_tip_geometry,
     geometry_values,
 )
+from design.process import FDM, RESIN
 from design.records import Mounting
 from design.registry import NAMES, parameter_vector
 from tests.support.setups import random_design

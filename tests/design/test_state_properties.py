@@ -36,7 +36,8 @@ from setups import EFFECT_SETS, random_design
 from design.designfile import load_design
 from design.equilibrium import solve_equilibria, stable_states
 from design.model import DEFAULT_EFFECTS, model_for
-from design.mounting import MAX_STOP_ANGLE, PROCESSES
+from design.mounting import MAX_STOP_ANGLE
+from design.process import PROCESSES
 from design.records import Design, Environment, Mounting
 from design.registry import index
 from design.sections import bending_rigidity

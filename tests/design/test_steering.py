@@ -21,7 +21,9 @@ from setups import random_design
 from design.designfile import default_design
 from design.equilibrium import solve_equilibria
 from design.model import DEFAULT_EFFECTS, model_for
-from design.steering import REACHED, SEED_STEP, SEEDS, _search, _solve_grid, _solved_grid, steer
+from design.steering import REACHED, SEED_STEP, SEEDS, steer
+from design.steering.grid import _solve_grid, _solved_grid
+from design.steering.search import _search
 
 EFFECTS = (frozenset(), DEFAULT_EFFECTS, frozenset({"torsion"}), frozenset({"near_field"}))
 """Effect sets drawn (each costs a compile of its sensitivity once per machine)."""

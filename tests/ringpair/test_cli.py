@@ -8,7 +8,7 @@ import sys
 from ringpair.cli import cli
 
 COMMANDS = {
-    "branch", "cad", "calibrate", "diagnose", "effects", "optimize", "show", "simulate",
+    "branch", "cad", "calibrate", "diagnose", "effects", "force", "optimize", "show", "simulate",
     "steer", "study", "synth", "workspace",
 }
 

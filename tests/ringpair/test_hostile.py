@@ -6,11 +6,14 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 import tomli_w
 
+from design.atomic import _proof
 from design.equilibrium import solve_design
 from design.geometry import rest_position
 from ringpair.tables import pose_rows
@@ -153,28 +156,60 @@ def test_names_from_files_stay_inside_outputs(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["named.toml", "outputs", "work"]
 
 
+def killed_writer(target) -> None:
+    """A process that dies (os._exit, no clean-up) while writing ``target`` atomically,
+    leaving its temporary: what a killed run leaves."""
+    code = (
+        "import os, sys\n"
+        "from design.atomic import atomic_path\n"
+        "with atomic_path(sys.argv[1]) as tmp:\n"
+        "    tmp.write_text('half')\n"
+        "    os._exit(9)\n"
+    )
+    subprocess.run([sys.executable, "-c", code, str(target)], check=False)
+
+
 def test_temporaries_of_a_killed_run_are_removed_and_a_live_ones_kept(tmp_path, run):
     out = tmp_path / "ws"
-    out.mkdir()
-    dead = [out / ".workspace.png.999999999.abcd1234.tmp", out / ".summary.json.k2j3h4g5.tmp"]
-    points = out / "points"
-    points.mkdir()
-    dead.append(points / "tmpab12cd34.tmp")
-    live = out / f".top.png.{os.getpid()}.abcd1234.tmp"
-    mine = out / "notes.tmp"
-    for p in (*dead, live, mine):
-        p.write_text("")
+    (out / "points").mkdir(parents=True)
+    for target in (out / "workspace.png", out / "points" / "p.npz"):
+        killed_writer(target)
+    dead = sorted(out.rglob("*.tmp"))
+    assert len(dead) == 2
+    stem = f".top.png.{os.getpid()}.abcd1234"  # a temporary of a writer still running
+    live = out / f"{stem}.{_proof(stem)}.tmp"
+    live.write_text("")
     assert run("workspace", "--step", "90", "--out", str(out)).exit_code == 0
     assert not any(p.exists() for p in dead)
-    assert live.exists() and mine.exists()
-    single = tmp_path / ".s.csv.999999999.abcd1234.tmp"
-    other = tmp_path / ".t.csv.999999999.abcd1234.tmp"
-    single.write_text("")
-    other.write_text("")
+    assert live.exists()
+    killed_writer(tmp_path / "s.csv")
+    killed_writer(tmp_path / "t.csv")
+    single, other = sorted(tmp_path.glob(".[st].csv.*.tmp"))
     assert (
         run("simulate", "--theta1", "0", "--quiet", "--out", str(tmp_path / "s.csv")).exit_code == 0
     )
     assert not single.exists() and other.exists()  # only the temporaries of its own file
+
+
+def test_files_that_only_look_like_temporaries_are_never_deleted(tmp_path, run):
+    """A user's files named as ringpair's temporaries are (by name alone, with a dead
+    process id, old and new patterns, three levels deep) survive the clean-up (issue 55)."""
+    out = tmp_path / "ws"
+    deep = out / "a" / "b"
+    deep.mkdir(parents=True)
+    planted = [
+        out / ".workspace.png.999999999.abcd1234.tmp",
+        out / ".summary.json.k2j3h4g5.tmp",
+        out / f".top.png.999999999.abcd1234.{'0' * 16}.tmp",
+        out / "a" / "tmpab12cd34.tmp",
+        deep / ".x.csv.999999999.abcd1234.tmp",
+    ]
+    (out / "points").mkdir()
+    planted.append(out / "points" / "tmpab12cd34.tmp")
+    for p in planted:
+        p.write_text("user data")
+    assert run("workspace", "--step", "90", "--out", str(out)).exit_code == 0
+    assert all(p.read_text() == "user data" for p in planted)
 
 
 def test_show_save_replaces_a_file_only_with_force(tmp_path, run):
@@ -334,9 +369,7 @@ def test_calibrate_on_one_row_names_the_file_and_the_parameters(tmp_path, run, b
     one = _csv(tmp_path, "one.csv", bench[1][:2])
     result = run("calibrate", str(one))
     assert result.exit_code == 2
-    assert "one.csv: 3 measured number(s) in 1 row cannot determine 4 parameters" in (
-        result.output
-    )
+    assert "one.csv: 3 measured number(s) in 1 row cannot determine 4 parameters" in (result.output)
     assert "bending_rigidity_scale" in result.output and "--free" not in result.output
 
 

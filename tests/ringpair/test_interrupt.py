@@ -80,7 +80,7 @@ def test_optimize_killed_and_rerun_equals_an_uninterrupted_run(tmp_path, pareto_
     rerun = ringpair("optimize", str(study), "--out", "again", cwd=tmp_path)
     assert rerun.returncode == 0, rerun.stderr
     assert temporaries(tmp_path / "again") == []
-    # a Pareto point's pickle and the summary hold timings; the rest is byte for byte
+    # a stored Pareto point and the summary hold timings; the rest is byte for byte
     timed = ("summary.json", *(p.name for p in (tmp_path / "whole" / "points").iterdir()))
     assert files(tmp_path / "again", skip=timed) == files(tmp_path / "whole", skip=timed)
     summary = [json.loads((tmp_path / d / "summary.json").read_text()) for d in ("again", "whole")]

@@ -355,7 +355,7 @@ def test_warm_starts_on_other_states_refit_with_the_ramp(demonstrator, monkeypat
     """Where the warm-started states are not the ramp's at the fit's answer, the fit is
     made again from its start with those rows by the ramp: the answer of a fit without
     warm starts."""
-    import optimize.fitting.calibrate as calibration
+    import optimize.fitting.calibrate.problem as calibration  # where the fit solves
 
     def elsewhere(model, params, x, start, end):
         """A Newton solve that lands elsewhere for commands with theta1 > 0."""
@@ -461,7 +461,7 @@ def test_a_fold_started_from_the_full_fits_states_is_that_fold(monkeypatch, seed
     residuals (to 1 % of the noise) as the fold fitted without them. A torsion data set
     drawn from the whole design space (seed in the message); states of the wrong shape are
     refused with the expected shape."""
-    import optimize.fitting.calibrate as calibration
+    import optimize.fitting.calibrate.problem as calibration  # where the fit solves
 
     fixed = seed is not None
     seed = int(np.random.SeedSequence().entropy % 2**32) if seed is None else seed

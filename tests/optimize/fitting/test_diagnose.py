@@ -282,7 +282,7 @@ def test_the_profile_likelihood_covers_torsion_where_the_linearised_error_does_n
 def test_non_finite_numbers_become_null_with_their_reason():
     import math
 
-    from optimize.fitting.diagnosis import NULL_REASONS, finite_json
+    from optimize.fitting.diagnose import NULL_REASONS, finite_json
 
     nulls: dict[str, str] = {}
     doc = {"final": {"cv_rmse_mm": math.nan, "params": {"a": 1.0}}, "x": [np.inf, 2]}
@@ -295,6 +295,7 @@ def test_a_failing_candidate_is_reported_and_the_diagnosis_goes_on(monkeypatch):
     import json
 
     import optimize.fitting.diagnose as dg
+    from optimize.fitting.diagnose import search
 
     real = dg._fit
 
@@ -303,7 +304,7 @@ def test_a_failing_candidate_is_reported_and_the_diagnosis_goes_on(monkeypatch):
             raise FloatingPointError("planted\nfailure")
         return real(design, m, effects, **options)
 
-    monkeypatch.setattr(dg, "_fit", fit)
+    monkeypatch.setattr(search, "_fit", fit)
     m = synthesize_data(DEMO, ("gravity",), n=24, noise_mm=0.2, seed=4).measurements
     result = dg.diagnose(DEMO, m, candidates=("torsion", "gravity"))
     assert [c.name for c in result.causes] == ["gravity"]
@@ -328,7 +329,7 @@ def test_a_profile_likelihood_that_fails_is_said_in_the_causes_evidence(monkeypa
     def profile(*args, **options):
         raise FloatingPointError("planted\nfailure")
 
-    monkeypatch.setattr(dg, "profile_intervals", profile)
+    monkeypatch.setattr(dg.search, "profile_intervals", profile)
     m = synthesize_data(DEMO, ("gravity",), n=24, noise_mm=0.2, seed=4).measurements
     result = dg.diagnose(DEMO, m, candidates=("gravity",))
     assert [c.name for c in result.causes] == ["gravity"]
@@ -401,7 +402,7 @@ def test_the_first_order_power_of_the_data_lies_within_its_band_of_the_refitted_
     for effect in EFFECT_FREE:
         margins = []
         for forced in (1.0, math.inf):  # 1: always to first order; inf: always refitted
-            monkeypatch.setattr(module, "FIRST_ORDER_BAND", forced)
+            monkeypatch.setattr(module.power, "FIRST_ORDER_BAND", forced)
             margins.append(module.power_of_data(design, m, base, effect, None))
         first, refit = (float(p["margin"]) for p in margins)  # type: ignore[arg-type]
         where = f"seed {seed}, {case.describe()}, {effect}: first {first:.3g}, refit {refit:.3g}"
@@ -499,7 +500,7 @@ def test_a_scan_that_solves_each_points_first_rows_first_chooses_as_one_that_sol
     )
     params = diagnosis._parameters(model, design, None)
     found = diagnosis._scan(model, m, params, free)
-    monkeypatch.setattr(diagnosis, "SCAN_HEAD", 1.0)
+    monkeypatch.setattr(diagnosis.scans, "SCAN_HEAD", 1.0)
     assert found == diagnosis._scan(model, m, params, free), f"seed {seed}"
 
 
@@ -554,5 +555,5 @@ def test_misfits_of_many_parameter_sets_solved_at_once_are_each_sets_own(effects
         assert together[i] == pytest.approx(alone, rel=1e-9), f"seed {seed}, point {i}"
     assert np.isfinite(together[1:]).sum() >= 3, f"seed {seed}: too few points solve every row"
     found = diagnosis._scan(model, m, nominal, free, ordered=False)
-    monkeypatch.setattr(diagnosis, "SCAN_HEAD", 1.0)
+    monkeypatch.setattr(diagnosis.scans, "SCAN_HEAD", 1.0)
     assert found == diagnosis._scan(model, m, nominal, free, ordered=False), f"seed {seed}"

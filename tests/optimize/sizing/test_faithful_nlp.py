@@ -17,7 +17,7 @@ from design.designfile import design_to_dict
 from design.equilibrium import solve_sequence
 from design.geometry import WIRE_CLEARANCE, disc_radius, external_distance, rest_position
 from design.model import RingPairModel
-from design.mounting import RESIN
+from design.process import RESIN
 from design.registry import parameter_vector
 from optimize.sizing.nlp import evaluate_design, optimize_design
 from optimize.sizing.nlp_problem import METRICS

@@ -59,3 +59,36 @@ def test_simulate_with_effects_and_an_ordered_path(tmp_path, run, read_csv):
     rows = read_csv(out)
     assert [r["snapped"] for r in rows] == ["false"] * 3
     assert float(rows[1]["theta1_tip_deg"]) == pytest.approx(30.0)  # no play in the demonstrator
+
+
+def test_simulate_writes_the_tip_stiffness_of_beam_theory_with_the_field_off(
+    tmp_path, run, read_csv, demonstrator_doc
+):
+    """The stiffness columns [mN/mm]: with the external magnet's remanence 0 (no field)
+    the baseline robot is a cantilever, whose
+    lateral stiffness at the tip is 3 EI / L^3 (both lateral directions) and whose axis is
+    rigid (left out of the largest)."""
+    import tomli_w
+
+    from design.designfile import load_design
+
+    doc = demonstrator_doc
+    doc["external_magnet"]["remanence_t"] = 0.0
+    path = tmp_path / "off.toml"
+    path.write_bytes(tomli_w.dumps(doc).encode())
+    out = tmp_path / "far.csv"
+    result = run(
+        "simulate", str(path), "--effects", "none", "--theta1", "0,90", "--out", str(out),
+        "--quiet",
+    )
+    assert result.exit_code == 0, result.output
+    rows = read_csv(out)
+    robot = load_design(path).robot
+    ei = sum(
+        t.youngs_modulus * np.pi * (t.outer_diameter**4 - t.inner_diameter**4) / 64
+        for t in (robot.catheter, robot.wire)
+    )
+    expected = 3 * ei / robot.free_length**3  # N/m = mN/mm
+    for r in rows:
+        assert float(r["stiffness_min_mN_per_mm"]) == pytest.approx(expected, rel=1e-6)
+        assert float(r["stiffness_max_mN_per_mm"]) == pytest.approx(expected, rel=1e-6)

@@ -22,10 +22,12 @@ from cad.build import PARTS_COLUMNS
 from cad.checks import load_stl
 from cad.process import FDM, RESIN
 from design.designfile import design_to_dict, load_design
+from design.made import made_design, made_value
 from optimize.sizing.nlp import optimize_design, pareto_values
 from optimize.sizing.studyfile import load_study
 from ringpair import report_html
 from ringpair.cli import cli
+from ringpair.parts_report import model_title
 
 
 @pytest.fixture(scope="module")
@@ -171,14 +173,22 @@ def _rows(path):
     return list(csv.DictReader(ln for ln in lines if not ln.startswith("#"))), notes
 
 
-def test_best_design_file_reads_back_as_the_optimum_and_simulates(study_run, tmp_path):
+def test_best_design_file_reads_back_as_the_rounded_optimum_and_simulates(study_run, tmp_path):
     path, out, first, _ = study_run
     assert first.exit_code == 0, first.output
     optimum = optimize_design(load_study(path)).design  # the same NLP, solved again here
     loaded = load_design(out / "best_design.toml")
-    want, got = _numbers(design_to_dict(optimum)), _numbers(design_to_dict(loaded))
+    # the optimum rounded to what can be made (design.made), every mounting choice stated
+    want = _numbers(design_to_dict(made_design(optimum), explicit=True))
+    got = _numbers(design_to_dict(loaded, explicit=True))
     assert got.keys() == want.keys()
     assert got == pytest.approx(want, rel=1e-9, abs=1e-12)
+    text = (out / "best_design.toml").read_text()
+    assert "[tip.mounting]" in text and "wall_mm" in text and "stop_angle_deg" in text
+    assert not re.search(r"_mm = \d+\.\d{6,}", text), text
+    doc = json.loads((out / "results.json").read_text())
+    assert "Sizes rounded to what can be made" in first.output
+    assert doc["forward"]["unrounded_disc_radius_mm"] > 0
     csv_out = tmp_path / "pose.csv"
     args = ["simulate", str(out / "best_design.toml"), "--theta1", "0,90", "--theta2", "0"]
     simulated = CliRunner().invoke(cli, [*args, "--out", str(csv_out)])
@@ -378,7 +388,10 @@ def test_report_design_table_has_every_dimension_with_its_bounds(study_run):
         unit, scale = file_unit(name)
         assert row["unit"] == unit
         assert row["start"] == pytest.approx(p.value(study.base) / scale)
-        assert row["optimum"] == pytest.approx(p.value(best) / scale)
+        # the table's optimum is the optimiser's; the hand-off file holds it rounded
+        assert made_value(name, row["optimum"] * scale) / scale == pytest.approx(
+            p.value(best) / scale, abs=1e-9
+        ), name
         b = study.bound(name)
         assert (row["low"], row["high"]) == (
             (pytest.approx(b.low / scale), pytest.approx(b.high / scale)) if b else (None, None)
@@ -386,7 +399,8 @@ def test_report_design_table_has_every_dimension_with_its_bounds(study_run):
     distance = rows["external_distance_mm (study file)"]
     assert "centre" in distance["quantity"]
     centre = np.asarray(best.external_magnet.center) * 1e3
-    assert distance["optimum"] == pytest.approx(centre[0] - best.robot.free_length * 1e3)
+    # both rounded to 0.5 mm in the hand-off file
+    assert distance["optimum"] == pytest.approx(centre[0] - best.robot.free_length * 1e3, abs=0.5)
     page = (out / "report.html").read_text()
     assert "external magnet distance, rest tip to the magnet&#x27;s centre" in page
 
@@ -436,11 +450,12 @@ def test_report_names_the_model_of_each_number_and_collapses_passing_checks(stud
 
     path, out, _, _ = study_run
     page = (out / "report.html").read_text()
-    study_model = RingPairModel(load_study(path).effects).name
-    work_model = RingPairModel(DEFAULT_EFFECTS).name
-    assert f"Model of the study: <b>{study_model}</b>" in page
-    assert f"Workspaces ({work_model} model)" in page
-    assert f"Pareto fronts ({study_model} model)" in page
+    study_model = model_title(load_study(path).effects)
+    work_model = model_title(RingPairModel(DEFAULT_EFFECTS).effects)
+    assert "+" not in work_model and "printed tip" in work_model  # words, not a log
+    assert f"Model of the study: <b>{html.escape(study_model)}</b>" in page
+    assert f"Workspaces ({html.escape(work_model)} model)" in page
+    assert f"Pareto fronts ({html.escape(study_model)} model)" in page
     checks = json.loads((out / "results.json").read_text())["cad"]["checks"]
     shown = re.search(r"(\d+) checks: (\d+) failed; (\d+) shown below", page)
     hidden = re.search(r"<summary>the other (\d+) checks, all passed</summary>", page)

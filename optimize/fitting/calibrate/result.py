@@ -1,0 +1,118 @@
+"""A calibration's result (:class:`CalibrationResult`), the weights of the rows
+(:func:`row_sigma`) and what a row without an equilibrium costs
+(:func:`straight_miss`). SI units; the ``*_mm`` figures are millimetres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from design.geometry import rest_position
+from design.registry import index
+from optimize.fitting.calibrate.policy import FREE_PARAMETERS
+from optimize.fitting.measurements import Measurements
+
+DEFAULT_SIGMA = 1e-3
+"""Weight of rows without a sigma when the data give none (the common noise is then
+estimated from the residuals). [m]"""
+
+
+def row_sigma(m: Measurements, sigma: float | None = None) -> np.ndarray:
+    """One-sigma position uncertainty of each row [m], shape (N,): the data's own where
+    given, else ``sigma``, else the median of the given ones, else DEFAULT_SIGMA."""
+    s = m.sigma.copy()
+    given = np.isfinite(s)
+    if sigma is not None:
+        fill = float(sigma)
+    elif given.any():
+        fill = float(np.median(s[given]))
+    else:
+        fill = DEFAULT_SIGMA
+    s[~given] = fill
+    return s
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """A fitted model.
+
+    names : the free parameters.
+    estimate, standard_error, nominal : by name [SI]; the standard error is infinite for
+        parameters the data do not determine (see ``message``).
+    correlation : shape (k, k), correlation of the estimates (Gauss-Newton); NaN rows and
+        columns for undetermined parameters.
+    params : shape (n,), full model parameter vector at the estimate. [SI]
+    effects : the model's effects.
+    residuals : shape (N, 3), measured - model tip position; NaN where not measured or
+        not converged. [m]
+    errors : shape (N,), distance model-measurement over the measured coordinates. [m]
+    rows : shape (N,) bool, the rows that were fitted.
+    rmse_mm, max_abs_mm : root mean square and largest of ``errors`` over the fitted rows. [mm]
+    noise_mm : the common position noise the residuals imply, s * sigma. [mm]
+    chi2, dof : weighted sum of squared data residuals and its degrees of freedom.
+    converged : the optimiser met its tolerance and every fitted row has an equilibrium.
+    at_bounds : names of parameters that ended on a bound (their errors are unreliable).
+    unconverged : number of fitted rows without an equilibrium at the estimate.
+    evaluations : number of model solves; time_s : wall time. [s]
+    message : the optimiser's message, plus any warning on identifiability.
+    states : shape (N, n_unknowns), the equilibria at the estimate; NaN rows where none.
+    jacobian : shape (n, k), d(residual)/d(fit units) of the n fitted data residuals at
+        the estimate, each over its sigma: the measured position coordinates of the fitted
+        rows (row-major), then their tip angles. [-]
+    jacobian_rows : shape (n,), the row of each residual of ``jacobian``.
+    """
+
+    names: tuple[str, ...]
+    estimate: dict[str, float]
+    standard_error: dict[str, float]
+    nominal: dict[str, float]
+    correlation: np.ndarray
+    params: np.ndarray
+    effects: frozenset[str]
+    residuals: np.ndarray
+    errors: np.ndarray
+    rows: np.ndarray
+    rmse_mm: float
+    max_abs_mm: float
+    noise_mm: float
+    chi2: float
+    dof: int
+    converged: bool
+    at_bounds: tuple[str, ...]
+    unconverged: int
+    evaluations: int
+    time_s: float
+    message: str = ""
+    priors: bool = field(default=False)
+    states: np.ndarray | None = field(default=None, repr=False)
+    jacobian: np.ndarray | None = field(default=None, repr=False)
+    jacobian_rows: np.ndarray | None = field(default=None, repr=False)
+
+    def table(self) -> list[dict[str, object]]:
+        """One row per parameter in report units: name, unit, nominal, estimate, standard
+        error, relative change."""
+        rows = []
+        for name in self.names:
+            label, factor = FREE_PARAMETERS[name].label
+            nom, est = self.nominal[name], self.estimate[name]
+            rows.append(
+                {
+                    "name": name,
+                    "unit": label,
+                    "nominal": nom * factor,
+                    "estimate": est * factor,
+                    "standard_error": self.standard_error[name] * factor,
+                    "change": (est / nom - 1) if nom else float("nan"),
+                }
+            )
+        return rows
+
+
+def straight_miss(params: np.ndarray, m: Measurements) -> np.ndarray:
+    """What a row without an equilibrium costs: the straight, unloaded robot's tip (at
+    ``params``' free length) minus each measured position, shape (N, 3), zero where not
+    measured. The fit's objective and the diagnosis' misfit use it alike. [m]"""
+    rest = rest_position(params[index("free_length")])
+    return np.where(m.measured, rest - m.position, 0.0)
