@@ -401,7 +401,7 @@ def _evaluation(
     scale = ca.MX.sym("scale")
     prm = params(v, base)
     _, rows_k, deflection = column.map(k_all)(big_x, ca.DM(cmd), _configuration_params(prm, k_all))
-    outputs = outcome[0](prm, rows_k, deflection, scale)
+    outputs: list[ca.MX] = list(outcome[0](prm, rows_k, deflection, scale))
     evaluate = ca.Function(
         "study_metrics",
         [v, big_x, base, scale],
