@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 import tomllib
 from dataclasses import dataclass, replace
 from importlib import resources
@@ -373,9 +374,7 @@ def _obstacles(raw: Any) -> tuple[Obstacle, ...]:
         path = f"environment.obstacles[{i}]"
         for given in node:
             if given not in OBSTACLE_KEYS:
-                raise DesignError(
-                    f"unknown key {path}.{given}{did_you_mean(given, OBSTACLE_KEYS)}"
-                )
+                raise DesignError(f"unknown key {path}.{given}{did_you_mean(given, OBSTACLE_KEYS)}")
         kind = node.get("kind")
         if kind not in KINDS:
             raise DesignError(f"{path}.kind must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -508,11 +507,34 @@ def source_distance(source: Source, points: np.ndarray) -> np.ndarray:
     return np.asarray(distances, dtype=float).ravel()
 
 
+MAX_INPUT_BYTES = 64 * 1024 * 1024
+"""Largest input file (design, study, measurements, targets) read. [bytes]"""
+
+
+def read_regular(path: str | os.PathLike[str], encoding: str = "utf-8") -> str:
+    """The text of ``path`` if it is a regular file of at most :data:`MAX_INPUT_BYTES`;
+    OSError saying what it is otherwise (a FIFO, a device or a socket is never opened: it
+    could block or never end)."""
+    p = Path(path)
+    info = os.stat(p)  # FileNotFoundError, IsADirectoryError below: as open() would say
+    if stat.S_ISDIR(info.st_mode):
+        raise IsADirectoryError(21, "is a folder", str(p))
+    if not stat.S_ISREG(info.st_mode):
+        raise OSError(f"{p} is not a regular file (a device, FIFO or socket); not read")
+    if info.st_size > MAX_INPUT_BYTES:
+        raise OSError(f"{p} has {info.st_size:,} bytes, more than {MAX_INPUT_BYTES:,}; not read")
+    with p.open("r", encoding=encoding) as f:
+        text = f.read(MAX_INPUT_BYTES + 1)
+    if len(text) > MAX_INPUT_BYTES:
+        raise OSError(f"{p} grew past {MAX_INPUT_BYTES:,} bytes while read; not read")
+    return text
+
+
 def read_input(path: Path, kind: str, error: type[Exception]) -> str:
     """The UTF-8 text of the ``kind`` file (e.g. "design") at ``path``; ``error`` with
     one message if it does not exist or cannot be read."""
     try:
-        return path.read_text(encoding="utf-8")
+        return read_regular(path)
     except FileNotFoundError:
         raise error(f"{kind} file {path} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -531,6 +553,8 @@ def loads_design(text: str, source: str = "<string>") -> Design:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise DesignError(f"{source}: arrays or tables nested too deeply to read") from None
     folder = Path(source).parent if source != "<string>" else None
     try:
         return design_from_dict(doc, folder)

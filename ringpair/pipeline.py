@@ -31,12 +31,10 @@ SI units inside; the report and the manifest say their units.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import platform
 import subprocess
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -58,6 +56,7 @@ from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
 from ringpair.report_notes import rounding_note
+from ringpair.runs import inputs_key, sha256, stage_path, stored_stage, tree_hash
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -153,50 +152,6 @@ class Run:
     """With measured data: what the study took from its diagnosis (:func:`calibrated_study`)."""
 
 
-def inputs_key(study: Study, study_text: str, data: Path | None) -> str:
-    """Identity of everything a study's stages depend on: the study file's text, the study
-    as resolved (its base design's values included), the bytes of the base design file it
-    names, the measured data set's files (when given) and the code
-    (:func:`optimize.sizing.pareto.code_digest`: version and source). [-]"""
-    from optimize.sizing.pareto import code_digest
-
-    named = Path(study.base_source) if study.base_source != "embedded" else None
-    base_file = sha256(named) if named is not None and named.is_file() else None
-    data_files = _tree_hash(data) if data is not None else None
-    return stored.digest(study_text, study, base_file, data_files, code_digest())
-
-
-def _stored(run: Run, name: str, key: str) -> tuple[Any, float] | None:
-    """A stage's stored (result, seconds) for ``key``, or None: not stored, or stored but
-    foreign, truncated or altered (then with a warning, and the stage runs again)."""
-    from optimize.sizing.pareto import PACKAGES
-
-    path = _stage_path(run, name, key)
-    if not path.exists():
-        return None
-    try:
-        value = stored.load(path, key, PACKAGES)
-    except stored.StoredError as exc:
-        warnings.warn(
-            f"{path}: not reused ({exc}); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
-        warnings.warn(
-            f"{path}: not reused (not a stage result); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    return value["result"], float(value["seconds"])
-
-
-def _stage_path(run: Run, name: str, key: str) -> Path:
-    return run.out / ".stages" / f"{name}-{key[:20]}.npz"
-
-
 def _stage(
     run: Run, name: str, what: str, inputs: tuple, work: Callable[[], Any], watch: Watch
 ) -> Any:
@@ -205,7 +160,7 @@ def _stage(
     seconds it took."""
     key = stored.digest(name, *inputs)
     watch.start(what)
-    old = _stored(run, name, key)
+    old = stored_stage(run.out, name, key)
     if old is not None:
         result, seconds = old
         run.reused[name] = True
@@ -216,7 +171,7 @@ def _stage(
         except Exception as exc:
             raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
         seconds = time.perf_counter() - t0
-        stored.save(_stage_path(run, name, key), {"result": result, "seconds": seconds}, key)
+        stored.save(stage_path(run.out, name, key), {"result": result, "seconds": seconds}, key)
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
@@ -340,14 +295,6 @@ def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str
     meaning = "the limit on the " + " and the ".join(GROUPS[g][2] for g in groups)
     what = {"meaning": meaning, "unit": unit, "old": old / scale, "new": new_limit / scale}
     return replace(study, constraints=constraints), what
-
-
-def sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with path.open("rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 @lru_cache(maxsize=1)
@@ -593,11 +540,6 @@ def _cad_summary(report: Any) -> dict[str, Any]:
     }
 
 
-def _tree_hash(path: Path) -> str:
-    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-    return stored.digest(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
-
-
 def _diagnose(data: Path) -> dict[str, Any]:
     """The diagnosis JSON of the data set (docs/formats.md), and under ``calibration`` its
     final model's effects and estimates by parameter name [SI]."""
@@ -633,7 +575,7 @@ def write_manifest(
         }
     }
     if data is not None:
-        inputs["data"] = {"path": str(data), "sha256": _tree_hash(data)}
+        inputs["data"] = {"path": str(data), "sha256": tree_hash(data)}
     files = sorted(
         p
         for p in run.out.rglob("*")

@@ -33,13 +33,18 @@ def parse_effects(text: str) -> frozenset[str]:
     tip, :data:`SWITCHES`) or a comma list of their names (which may include 'default');
     ValueError names the bad one."""
     text = text.strip()
-    if text in ("", "none", "baseline"):
+    if text in ("none", "baseline"):
         return frozenset()
     if text == "default":
         return DEFAULT_EFFECTS
     if text == "all":
         return frozenset(SWITCHES)
     names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise ValueError(
+            f"no model effect named in {text!r}; expected 'none', 'default', 'all' or a comma "
+            f"list of {', '.join(SWITCHES)}"
+        )
     if "default" in names:  # 'default,torsion': the model for design work and more
         names = [n for n in names if n != "default"] + sorted(DEFAULT_EFFECTS)
     bad = [n for n in names if n not in SWITCHES]

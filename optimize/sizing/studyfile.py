@@ -581,6 +581,8 @@ def loads_study(text: str, source: str = "<string>", folder: Path | None = None)
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise StudyError(f"{source}: arrays or tables nested too deeply to read") from None
     try:
         return study_from_dict(doc, folder)
     except StudyError as exc:

@@ -12,6 +12,7 @@ import numpy as np
 from rich.table import Table
 
 from cad.layout import ActuatorSpec
+from design.designfile import read_regular
 from design.model import RingPairModel
 from design.paths import (
     PathSchedule,
@@ -101,7 +102,7 @@ def parse_target(text: str, where: str) -> tuple[float, float]:
 def read_targets(path: Path) -> list[tuple[float, float]]:
     """Targets from a CSV with columns y_mm, z_mm (lines starting with # are comments). [mm]"""
     try:
-        lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+        lines = [line for line in read_regular(path).splitlines() if not line.startswith("#")]
     except (OSError, UnicodeDecodeError) as exc:
         raise UserError(f"--targets: cannot read {path}: {exc}") from None
     reader = csv.DictReader(lines)
