@@ -18,7 +18,9 @@ def test_fronts_of_a_study_with_no_feasible_point_draw_an_empty_panel(tmp_path):
         ParetoPoint("external_distance", eps, None, error="IPOPT: infeasible")
         for eps in (0.2, 0.25, 0.3)
     )
-    pareto = ParetoResult({"external_distance": points}, solved=3, resumed=0, seconds=1.0, workers=1)
+    pareto = ParetoResult(
+        {"external_distance": points}, solved=3, resumed=0, seconds=1.0, workers=1
+    )
     best = SimpleNamespace(objective=float("nan"), feasible=False, metrics={})
     path = tmp_path / "fronts.png"
     plot_fronts(pareto, best, default_study(), path)
