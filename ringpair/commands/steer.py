@@ -13,6 +13,7 @@ from rich.table import Table
 
 from cad.layout import ActuatorSpec
 from design.designfile import read_regular
+from design.home import solve_home
 from design.model import RingPairModel
 from design.paths import (
     PathSchedule,
@@ -22,7 +23,6 @@ from design.paths import (
     follow,
     largest_ellipse,
     line,
-    workspace_center,
 )
 from design.records import Design
 from design.steering import REACHED, Steering, steer
@@ -179,8 +179,9 @@ def steer_rows(result: Steering) -> list[dict]:
     "--center",
     metavar="Y,Z",
     default=None,
-    help="Centre of a circle or ellipse in mm (default: the workspace's centre, the mean "
-    "tip with the rings parallel).",
+    help="Centre of a circle or ellipse in mm (default: the robot's home, the tip with the "
+    "rings antiparallel, theta1 = 180, theta2 = 0 deg; ellipse:largest is about the "
+    "workspace's centre, the mean tip with the rings parallel).",
 )
 @click.option("--closed", is_flag=True, help="A CSV path returns to its first point.")
 @path_option(
@@ -373,8 +374,10 @@ def _steer_path(
             wanted = schedule.points / MM
         else:
             if center is None and not spec.lower().startswith("line"):
-                y, z = workspace_center(model, params)
-                center = (y / MM, z / MM)
+                home = solve_home(model, params, d.robot.free_length)  # issue 49
+                if not home.stable:
+                    raise UserError(f"--center: the robot has no home ({home.state.failure[0]})")
+                center = (home.position[1] / MM, home.position[2] / MM)
             wanted, closed = parse_path(spec, count, center)
         _within_reach(d, [tuple(p) for p in wanted])
         if schedule is None:
