@@ -1,23 +1,28 @@
-"""The controllable workspace: the tip positions the robot can be steered to from rest
-without snapping.
+"""The controllable workspace: the tip positions the robot can be steered to from its home
+(:mod:`design.home`) without snapping, and the one disc number a design is judged by.
 
 On the grid of ring angles (the torus (theta1, theta2), spacing ``step``) each node has
 its state (:func:`design.equilibrium.solve_equilibria`). Two neighbouring nodes are
 linked, one way, when driving the rings from one to the other
 (:func:`design.equilibrium.drive`: the state continued in sub-steps, never across a fold)
-ends in the other's state. The robot starts at rest in the field: with the rings
-antiparallel (the neutral loop, where the tip is nearest the unloaded robot). The nodes
-reachable from there along links are the controllable configurations; where a link is
-missing the robot snaps (or lands in another state than the one it would reach on its
-own), and what lies behind only through such links is reachable only by snapping.
+ends in the other's state. The robot starts at its home: the rings antiparallel, the
+grid's node at (pi, 0). The nodes reachable from there along links are the controllable
+configurations; where a link is missing the robot snaps (or lands in another state than
+the one it would reach on its own), and what lies behind only through such links is
+reachable only by snapping.
 
 Metrics:
 
-- ``disc_radius``: radius of the largest disc about the rest position inside the outer
+- ``covered_disc_radius``: radius of the largest disc about the home inside the outer
   rim of the images of the grid cells whose four corners are controllable (rasterised at
   PIXELS across the tips' extent; holes enclosed by them, like the one inside the neutral
-  loop, do not count): the workspace's disc radius (:mod:`design.workspace`) counting
-  only what can be steered to;
+  loop, do not count), to the raster's ``resolution`` (the grid's chord and two pixels);
+- ``disc_radius``, **the disc**: the disc about the home the robot can be steered over
+  without a snap. Where the controllable cells cover the workspace's disc
+  (:attr:`design.workspace.Workspace.disc_radius`, the loop's smooth curve about home) to
+  the raster's resolution, that disc; else the covered disc. Never larger than the
+  workspace's disc; the NLP's disc (which keeps its loops free of snaps) is the same
+  measure, so the two agree where the optimum is steerable;
 - ``fraction``: the share of the grid's configurations that are controllable.
 
 SI units (m, rad).
@@ -30,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import label
 
-from design.equilibrium import Equilibria, drive, solve_equilibria
-from design.geometry import rest_position
+from design.equilibrium import Equilibria, drive
+from design.home import HOME_COMMAND
 from design.model import RingPairModel
-from design.workspace import angle_grid
+from design.workspace import Workspace, angle_grid, sweep
 
 SAME = 1e-6
 """A driven state is a node's own when their unknowns agree to this, over their scale. [-]"""
@@ -50,7 +55,11 @@ class Controllable:
     linked : shape (4, G, G), the link from each node towards +theta1, -theta1, +theta2,
         -theta2 holds.
     position : shape (G, G, 3), each node's tip (NaN without a state). [m]
-    disc_radius : largest disc about the rest position covered by controllable cells. [m]
+    centre : shape (3,), the home's tip the discs are about. [m]
+    covered_disc_radius : largest disc about the home covered by controllable cells. [m]
+    resolution : how far the covered disc may fall short of a fully covered one (the
+        grid's chord at the tips' extent and two raster pixels). [m]
+    disc_radius : the disc (module docstring). [m]
     fraction : share of the grid's nodes that are controllable. [-]
     """
 
@@ -58,6 +67,9 @@ class Controllable:
     controllable: np.ndarray
     linked: np.ndarray
     position: np.ndarray
+    centre: np.ndarray
+    covered_disc_radius: float
+    resolution: float
     disc_radius: float
     fraction: float
 
@@ -71,12 +83,15 @@ def controllable_workspace(
     params: np.ndarray,
     grid: Equilibria,
     angles: np.ndarray,
-    rest_position: np.ndarray,
+    centre: np.ndarray,
+    workspace_disc: float | None = None,
 ) -> Controllable:
     """The controllable configurations of ``grid``, the states at the angle pairs of
     ``angles`` x ``angles`` (meshgrid, 'ij' indexing, raveled, as
     :func:`design.workspace.sweep_workspace` solves them) (module docstring).
-    rest_position : the unloaded tip, shape (3,). [m]"""
+    centre : the home's tip, shape (3,) (:attr:`design.home.Home.position`). [m]
+    workspace_disc : the workspace's disc about it (:attr:`Workspace.disc_radius`); without
+        it the disc is the covered one. [m]"""
     g = len(angles)
     if len(grid) != g * g:
         raise ValueError(f"the grid has {len(grid)} states, expected {g} x {g}")
@@ -103,24 +118,35 @@ def controllable_workspace(
         driven, ok = drive(model, params, x[i, j].T, start, end)
         same = np.max(np.abs(driven - target) / scale, axis=0) <= SAME
         linked[k].ravel()[a] = ok & same
-    controllable = _reached(linked, _neutral(stable, g))
+    controllable = _reached(linked, _home_node(angles) & stable)
     position = np.where(stable[:, :, None], grid.position.reshape(g, g, 3), np.nan)
+    centre = np.asarray(centre, float)
+    covered, pixel, extent = _covered_disc(position, controllable, centre)
+    resolution = extent * (1 - np.cos(np.pi / g)) + 2 * pixel
+    disc = covered
+    if workspace_disc is not None and covered >= workspace_disc - resolution:
+        disc = float(workspace_disc)
     return Controllable(
         angles=angles,
         controllable=controllable,
         linked=linked,
         position=position,
-        disc_radius=_covered_disc(position, controllable, rest_position),
+        centre=centre,
+        covered_disc_radius=covered,
+        resolution=float(resolution),
+        disc_radius=float(min(disc, workspace_disc)) if workspace_disc is not None else disc,
         fraction=float(controllable.mean()),
     )
 
 
-def _neutral(stable: np.ndarray, g: int) -> np.ndarray:
-    """The grid's nodes nearest antiparallel rings (theta2 = theta1 + pi), with states."""
+def _home_node(angles: np.ndarray) -> np.ndarray:
+    """The grid's node nearest the home's command (theta1, theta2) = HOME_COMMAND."""
+    g = len(angles)
     start = np.zeros((g, g), bool)
-    i = np.arange(g)
-    start[i, (i + g // 2) % g] = True
-    return start & stable
+    turn = 2 * np.pi
+    i, j = (int(np.argmin(np.abs((angles - a + np.pi) % turn - np.pi))) for a in HOME_COMMAND)
+    start[i, j] = True
+    return start
 
 
 def _reached(linked: np.ndarray, start: np.ndarray) -> np.ndarray:
@@ -136,14 +162,17 @@ def _reached(linked: np.ndarray, start: np.ndarray) -> np.ndarray:
     return reached
 
 
-def _covered_disc(position: np.ndarray, controllable: np.ndarray, rest: np.ndarray) -> float:
-    """Largest disc about the rest tip (y, z) inside the outer rim of the images of the grid
+def _covered_disc(
+    position: np.ndarray, controllable: np.ndarray, rest: np.ndarray
+) -> tuple[float, float, float]:
+    """Largest disc about ``rest`` (y, z) inside the outer rim of the images of the grid
     cells whose four corners are controllable: the distance from it to the nearest raster
-    pixel that no such cell covers and that is open to the outside. [m]"""
+    pixel that no such cell covers and that is open to the outside; the pixel; the
+    raster's half-width. [m]"""
     ok = controllable & np.isfinite(position).all(axis=2)
     cell = ok & np.roll(ok, -1, 0) & np.roll(ok, -1, 1) & np.roll(ok, (-1, -1), (0, 1))
     if not cell.any():
-        return 0.0
+        return 0.0, 0.0, 0.0
     tip = position[:, :, 1:] - rest[1:]
     corners = [tip, np.roll(tip, -1, 0), np.roll(tip, (-1, -1), (0, 1)), np.roll(tip, -1, 1)]
     quads = np.stack([c[cell] for c in corners], axis=1)  # (C, 4, 2)
@@ -165,20 +194,25 @@ def _covered_disc(position: np.ndarray, controllable: np.ndarray, rest: np.ndarr
     outside = np.isin(pieces, open_pieces[open_pieces > 0])
     py, pz = np.meshgrid(centres, centres, indexing="ij")
     gap = np.hypot(py, pz)[outside]
-    return float(max(gap.min() - pixel / np.sqrt(2), 0.0)) if gap.size else float(extent)
+    disc = float(max(gap.min() - pixel / np.sqrt(2), 0.0)) if gap.size else float(extent)
+    return disc, float(pixel), float(extent)
+
+
+def steerable(ws: Workspace, model: RingPairModel, params: np.ndarray) -> Controllable:
+    """The controllable workspace of a swept workspace ``ws`` (its grid, about its home,
+    capped by its disc): :func:`controllable_workspace`."""
+    g = int(round(np.sqrt(len(ws.grid))))
+    angles = angle_grid(2 * np.pi / g)
+    return controllable_workspace(model, params, ws.grid, angles, ws.home.position, ws.disc_radius)
 
 
 def controllable_disc_radius(
     model: RingPairModel, params: np.ndarray, free_length: float, step: float
 ) -> float:
-    """The disc about the rest tip that the robot can be steered over from rest without a
-    snap: :func:`controllable_workspace` on a grid of ring angles of spacing ``step``
-    [rad], the rest tip the straight robot's of ``free_length`` [m]. [m]"""
-    angles = angle_grid(step)
-    t1, t2 = np.meshgrid(angles, angles, indexing="ij")
-    grid = solve_equilibria(model, params, t1.ravel(), t2.ravel())
-    rest = rest_position(free_length)
-    return controllable_workspace(model, params, grid, angles, rest).disc_radius
+    """The disc: the disc about the home that the robot can be steered over from home
+    without a snap (module docstring), on a grid of ring angles of spacing ``step``
+    [rad]; ``free_length`` [m] places the straight tip. [m]"""
+    return steerable(sweep(model, params, free_length, step), model, params).disc_radius
 
 
 def _inside(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -9,16 +9,21 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 import tomllib
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import tomli_w
 
 from design.atomic import write_text
+from design.fields.fieldmap import FieldMapError, read_field_map
+from design.fields.sources import KINDS as SOURCE_KINDS
+from design.fields.sources import PERMANENT, magnet_distance
 from design.geometry import (
     WIRE_CLEARANCE,
     cylinder_distance,
@@ -35,6 +40,7 @@ from design.records import (
     Mounting,
     Obstacle,
     Robot,
+    Source,
     Tip,
     Tube,
 )
@@ -114,7 +120,7 @@ def _sections() -> dict[str, tuple[Key, ...]]:
 SECTIONS: dict[str, tuple[Key, ...]] = _sections()
 OPTIONAL_SECTIONS = {"environment"}
 OPTIONAL_KEYS = {"environment.gravity_m_s2"}
-TOP_KEYS = {"name", "description", "robot", "tip", "external_magnet", "environment"}
+TOP_KEYS = {"name", "description", "robot", "tip", "external_magnet", "environment", "field"}
 EXTERNAL_SHAPES = ("cylinder",)
 UNIT_TOLERANCE = 1e-3
 
@@ -194,8 +200,9 @@ def _tube(doc: dict[str, Any], name: str) -> Tube:
     )
 
 
-def design_from_dict(doc: dict[str, Any]) -> Design:
-    """Build a validated :class:`Design` (SI) from a parsed design-file document."""
+def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
+    """Build a validated :class:`Design` (SI) from a parsed design-file document; a field
+    map's ``file`` is relative to the folder ``base`` (default: the working directory)."""
     for given in doc:
         if given not in TOP_KEYS:
             raise DesignError(f"unknown key {given}{did_you_mean(given, TOP_KEYS)}")
@@ -240,6 +247,29 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
             f"in the ring; got {tip.magnet_inner_diameter / MM:g}"
         )
 
+    sources = _sources(doc, base)
+    ext = None
+    if "external_magnet" in doc or not sources:
+        ext = _external_magnet(doc)
+
+    environment = Environment()
+    if "environment" in doc:
+        env = _section(doc, "environment")
+        obstacles = _obstacles(doc["environment"].get("obstacles", []))
+        environment = Environment(gravity=env.get("gravity_m_s2"), obstacles=obstacles)
+
+    design = Design(name, robot, tip, ext, environment, description, sources)
+    _check_clearance(design)
+    _check_obstacles(design)
+    return design
+
+
+def _external_magnet(doc: dict[str, Any]) -> ExternalMagnet:
+    if "external_magnet" not in doc:
+        raise DesignError(
+            "missing section [external_magnet] (or a field of [[field.sources]]); the "
+            "robot needs a field to steer in"
+        )
     e = _section(doc, "external_magnet")
     shape = doc["external_magnet"].get("shape")
     if shape not in EXTERNAL_SHAPES:
@@ -255,7 +285,7 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
             f"{UNIT_TOLERANCE:g}); got {list(mag)} of length {norm:.6g}"
         )
     mag = tuple(c / norm for c in mag)
-    ext = ExternalMagnet(
+    return ExternalMagnet(
         shape,
         e["diameter_mm"],
         e["length_mm"],
@@ -264,16 +294,69 @@ def design_from_dict(doc: dict[str, Any]) -> Design:
         mag,
     )
 
-    environment = Environment()
-    if "environment" in doc:
-        env = _section(doc, "environment")
-        obstacles = _obstacles(doc["environment"].get("obstacles", []))
-        environment = Environment(gravity=env.get("gravity_m_s2"), obstacles=obstacles)
 
-    design = Design(name, robot, tip, ext, environment, description)
-    _check_clearance(design)
-    _check_obstacles(design)
-    return design
+def _sources(doc: dict[str, Any], base: Path | None) -> tuple[Source, ...]:
+    """The ``[[field.sources]]`` list (docs/formats.md), each checked against its kind's
+    quantities (:data:`design.fields.sources.KINDS`); a map's grid read from its file."""
+    node = doc.get("field", {})
+    if not isinstance(node, dict) or set(node) - {"sources"}:
+        extra = sorted(set(node) - {"sources"}) if isinstance(node, dict) else []
+        raise DesignError(
+            f"[field] holds only the list [[field.sources]]; got {extra or node!r}"
+        )
+    raw = node.get("sources", [])
+    if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
+        raise DesignError(f"field.sources must be a list of tables [[field.sources]]; got {raw!r}")
+    return tuple(_source(i + 1, t, base) for i, t in enumerate(raw))
+
+
+def _source(number: int, table: dict[str, Any], base: Path | None) -> Source:
+    where = f"field.sources[{number}]"
+    kind = table.get("kind")
+    if kind not in SOURCE_KINDS:
+        raise DesignError(
+            f"{where}.kind must be one of {', '.join(map(repr, SOURCE_KINDS))}; got {kind!r}"
+        )
+    quantities = {q.key: q for q in SOURCE_KINDS[kind]}
+    allowed = {"kind", *quantities} | ({"file"} if kind == "map" else set())
+    for given in table:
+        if given not in allowed:
+            raise DesignError(
+                f"unknown key {where}.{given} for a {kind} source"
+                f"{did_you_mean(given, allowed)}; expected {', '.join(sorted(allowed))}"
+            )
+    values: dict[str, Any] = {}
+    for key, q in quantities.items():
+        path = f"{where}.{key}"
+        raw = table.get(key, q.default)
+        if raw is None:
+            raise DesignError(f"missing key {path} ({q.meaning}) for a {kind} source")
+        spec = Key(key, q.meaning, q.scale, q.low, q.high, q.low_open, q.size == 3)
+        if q.size == 1:
+            values[q.name] = _number(path, raw, spec) * q.scale
+            continue
+        v = _vector(path, raw, spec)
+        if q.unit_vector:
+            norm = math.sqrt(sum(c * c for c in v))
+            if abs(norm - 1.0) > UNIT_TOLERANCE:
+                raise DesignError(
+                    f"{path} must be a unit vector (length 1 within {UNIT_TOLERANCE:g}); "
+                    f"got {list(v)} of length {norm:.6g}"
+                )
+            v = (v[0] / norm, v[1] / norm, v[2] / norm)
+        values[q.name] = (v[0] * q.scale, v[1] * q.scale, v[2] * q.scale)
+    if kind != "map":
+        return Source(kind, **values)  # type: ignore[arg-type]
+    name = table.get("file")
+    if not isinstance(name, str) or not name.strip():
+        raise DesignError(f"missing key {where}.file (the field map's CSV file) for a map source")
+    where_file = Path(name) if base is None else base / name
+    try:
+        fieldmap = read_field_map(where_file)
+    except FieldMapError as exc:
+        raise DesignError(f"{where}.file: {exc}") from None
+    resolved = str(where_file.resolve())
+    return Source(kind, file=resolved, fieldmap=fieldmap, **values)  # type: ignore[arg-type]
 
 
 OBSTACLE_KEYS = {"kind", "point_mm", "normal", "radius_mm", "friction"}
@@ -291,9 +374,7 @@ def _obstacles(raw: Any) -> tuple[Obstacle, ...]:
         path = f"environment.obstacles[{i}]"
         for given in node:
             if given not in OBSTACLE_KEYS:
-                raise DesignError(
-                    f"unknown key {path}.{given}{did_you_mean(given, OBSTACLE_KEYS)}"
-                )
+                raise DesignError(f"unknown key {path}.{given}{did_you_mean(given, OBSTACLE_KEYS)}")
         kind = node.get("kind")
         if kind not in KINDS:
             raise DesignError(f"{path}.kind must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -380,8 +461,8 @@ _MOUNTING = {
 
 
 def _check_clearance(design: Design) -> None:
-    """Reject an external magnet that overlaps the straight robot (base to distal ring)."""
-    ext = design.external_magnet
+    """Reject a permanent magnet (the external magnet, a source) that overlaps the straight
+    robot (base to distal ring)."""
     tip = design.tip
     proximal, distal = ring_centres(
         rest_position(design.robot.free_length), np.array([1.0, 0.0, 0.0]), tip.spacing
@@ -392,23 +473,68 @@ def _check_clearance(design: Design) -> None:
     r_body = np.where(
         near_tip, tip.magnet_outer_diameter / 2, design.robot.catheter.outer_diameter / 2
     )
-    offset = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)]) - np.asarray(ext.center)
-    gap = cylinder_distance(offset, ext.magnetization, ext.diameter / 2, ext.length / 2)
-    overlap = np.flatnonzero(gap < r_body)
-    if overlap.size:
-        raise DesignError(
-            "external_magnet.center_mm places the magnet on the straight robot: the "
-            f"cylinder must clear the robot (base to distal ring, radius "
-            f"{r_body[overlap[0]] / MM:g} mm); got an overlap at x = {x[overlap[0]] / MM:.2f} mm "
-            "in the base frame"
+    points = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    bodies = []
+    ext = design.external_magnet
+    if ext is not None:
+        gap = cylinder_distance(
+            points - np.asarray(ext.center), ext.magnetization, ext.diameter / 2, ext.length / 2
         )
+        bodies.append(("external_magnet.center_mm", "magnet", gap))
+    for i, src in enumerate(design.sources):
+        if src.kind in PERMANENT:
+            gap = source_distance(src, points)
+            bodies.append((f"field.sources[{i + 1}].center_mm", f"{src.kind} magnet", gap))
+    for key, what, gap in bodies:
+        overlap = np.flatnonzero(gap < r_body)
+        if overlap.size:
+            raise DesignError(
+                f"{key} places the {what} on the straight robot: it must clear the robot "
+                f"(base to distal ring, radius {r_body[overlap[0]] / MM:g} mm); got an "
+                f"overlap at x = {x[overlap[0]] / MM:.2f} mm in the base frame"
+            )
+
+
+def source_distance(source: Source, points: np.ndarray) -> np.ndarray:
+    """Distance of ``points`` (n, 3) to a permanent magnet source's body
+    (:func:`design.fields.sources.magnet_distance`), 0 inside. [m]"""
+    p = ca.SX.sym("p", 3)
+    q: dict[str, Any] = {
+        k.name: ca.DM(np.ravel(getattr(source, k.name))) for k in SOURCE_KINDS[source.kind]
+    }
+    fn = ca.Function("distance", [p], [magnet_distance(source.kind, q, p)])
+    distances = fn.map(len(points))(np.asarray(points, float).T)
+    return np.asarray(distances, dtype=float).ravel()
+
+
+MAX_INPUT_BYTES = 64 * 1024 * 1024
+"""Largest input file (design, study, measurements, targets) read. [bytes]"""
+
+
+def read_regular(path: str | os.PathLike[str], encoding: str = "utf-8") -> str:
+    """The text of ``path`` if it is a regular file of at most :data:`MAX_INPUT_BYTES`;
+    OSError saying what it is otherwise (a FIFO, a device or a socket is never opened: it
+    could block or never end)."""
+    p = Path(path)
+    info = os.stat(p)  # FileNotFoundError, IsADirectoryError below: as open() would say
+    if stat.S_ISDIR(info.st_mode):
+        raise IsADirectoryError(21, "is a folder", str(p))
+    if not stat.S_ISREG(info.st_mode):
+        raise OSError(f"{p} is not a regular file (a device, FIFO or socket); not read")
+    if info.st_size > MAX_INPUT_BYTES:
+        raise OSError(f"{p} has {info.st_size:,} bytes, more than {MAX_INPUT_BYTES:,}; not read")
+    with p.open("r", encoding=encoding) as f:
+        text = f.read(MAX_INPUT_BYTES + 1)
+    if len(text) > MAX_INPUT_BYTES:
+        raise OSError(f"{p} grew past {MAX_INPUT_BYTES:,} bytes while read; not read")
+    return text
 
 
 def read_input(path: Path, kind: str, error: type[Exception]) -> str:
     """The UTF-8 text of the ``kind`` file (e.g. "design") at ``path``; ``error`` with
     one message if it does not exist or cannot be read."""
     try:
-        return path.read_text(encoding="utf-8")
+        return read_regular(path)
     except FileNotFoundError:
         raise error(f"{kind} file {path} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -427,8 +553,11 @@ def loads_design(text: str, source: str = "<string>") -> Design:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise DesignError(f"{source}: arrays or tables nested too deeply to read") from None
+    folder = Path(source).parent if source != "<string>" else None
     try:
-        return design_from_dict(doc)
+        return design_from_dict(doc, folder)
     except DesignError as exc:
         raise DesignError(f"{source}: {exc}") from None
 
@@ -455,7 +584,8 @@ def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
         doc["description"] = design.description
     doc["robot"] = {}
     doc["tip"] = {}
-    doc["external_magnet"] = {"shape": design.external_magnet.shape}
+    if design.external_magnet is not None:
+        doc["external_magnet"] = {"shape": design.external_magnet.shape}
     mounting = design.tip.mounting
     defaults = Mounting.printed_by(mounting.process)
     if explicit or mounting.process != DEFAULT_PROCESS:
@@ -465,6 +595,8 @@ def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
             continue
         section, leaf = p.key.rsplit(".", 1)
         if section == "environment" and design.environment.gravity is None:
+            continue
+        if section == "external_magnet" and design.external_magnet is None:
             continue
         value = p.value(design)
         default = p.default
@@ -485,6 +617,8 @@ def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
         doc.setdefault("environment", {})["obstacles"] = [
             _obstacle_table(o) for o in design.environment.obstacles
         ]
+    if design.sources:
+        doc["field"] = {"sources": _sources_to_list(design)}
     return doc
 
 
@@ -498,6 +632,23 @@ def _obstacle_table(o: Obstacle) -> dict[str, Any]:
     if o.friction:
         table["friction"] = o.friction
     return table
+
+
+def _sources_to_list(design: Design) -> list[dict[str, Any]]:
+    """The ``[[field.sources]]`` tables of ``design`` (file units)."""
+    out = []
+    for src in design.sources:
+        table: dict[str, Any] = {"kind": src.kind}
+        for q in SOURCE_KINDS[src.kind]:
+            value = getattr(src, q.name)
+            if q.size == 3:
+                table[q.key] = [_file_units(v, q.scale) for v in value]
+            else:
+                table[q.key] = _file_units(value, q.scale)
+        if src.kind == "map":
+            table["file"] = src.file
+        out.append(table)
+    return out
 
 
 def dumps_design(design: Design, explicit: bool = False) -> str:

@@ -169,6 +169,66 @@ def segment_distances(loop: Any) -> Any:
     return np.linalg.norm(a + t[:, None] * ab, axis=1)
 
 
+def curve_distances(loop: Any) -> Any:
+    """Distance from the origin to each arc of the smooth closed curve through the samples
+    ``loop`` (vertices in order, shape (S, 2)), shape (S,) (CasADi: (S, 1)). [m]
+
+    Arc i joins vertex i to vertex i + 1 as the Catmull-Rom (cubic Hermite) curve through
+    its neighbours, tangents (P_i+1 - P_i-1) / 2 and (P_i+2 - P_i) / 2; the distance is
+    that of the arc's point at the chord's nearest parameter (:func:`segment_distances`),
+    first-order exact in the arc's bow. A loop of K samples of a smooth curve of radius R
+    lies inside it by the chord's sagitta, R (1 - cos(pi / K)) (0.17 mm for K = 24, R = 20
+    mm); the arcs follow it to O(K^-4): a workspace measured on 24 samples (the NLP's) and on
+    720 (the forward sweep's) agree. Smooth where :func:`segment_distances` is.
+    """
+    if is_symbolic(loop):
+        a = loop
+        b = ca.vertcat(loop[1:, :], loop[0, :])
+        before = ca.vertcat(loop[-1, :], loop[:-1, :])
+        after = ca.vertcat(loop[2:, :], loop[:2, :])
+        ab = b - a
+        t = -ca.sum2(a * ab) / ca.fmax(ca.sum2(ab * ab), 1e-300)
+        t = ca.fmin(ca.fmax(t, 0), 1)
+        bow = _arc_bow(t, a, b, before, after, lambda u: ca.repmat(u, 1, 2))
+        closest = a + ca.repmat(t, 1, 2) * ab + bow
+        return ca.sqrt(ca.sum2(closest * closest) + SMOOTH**2)
+    a = np.asarray(loop, float)
+    b, before, after = np.roll(a, -1, axis=0), np.roll(a, 1, axis=0), np.roll(a, -2, axis=0)
+    ab = b - a
+    t = np.clip(-np.sum(a * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0, 1)
+    bow = _arc_bow(t, a, b, before, after, lambda u: u[:, None])
+    return np.linalg.norm(a + t[:, None] * ab + bow, axis=1)
+
+
+def _arc_bow(t: Any, a: Any, b: Any, before: Any, after: Any, column: Any) -> Any:
+    """The Catmull-Rom arc's offset from its chord at parameter t (:func:`curve_distances`):
+    h10 m_a + h11 m_b + (h00 - 1 + t) a + (h01 - t) b, the Hermite basis h. [m]"""
+    h00 = 2 * t**3 - 3 * t**2 + 1
+    h10 = t**3 - 2 * t**2 + t
+    h01 = -2 * t**3 + 3 * t**2
+    h11 = t**3 - t**2
+    m_a, m_b = (b - before) / 2, (after - a) / 2
+    return column(h10) * m_a + column(h11) * m_b + column(h00 - 1 + t) * a + column(h01 - t) * b
+
+
+def curve_disc_radius(loop: Any) -> Any:
+    """Radius of the largest disc around the origin inside the smooth closed curve through
+    the samples ``loop`` (S, 2): the distance to its nearest arc (:func:`curve_distances`),
+    0 when the loop does not wind around the origin or has fewer than three vertices. [m]
+
+    The workspace's disc (about the robot's home, :mod:`design.home`), the same whether the
+    loop has the NLP's few samples or the forward sweep's many."""
+    if is_symbolic(loop):
+        if loop.size1() < 3:
+            return ca.SX(0)
+        winds = ca.fabs(winding_number(loop)) > 0.5
+        return ca.if_else(winds, ca.mmin(curve_distances(loop)), 0)
+    loop = np.asarray(loop, float)
+    if loop.shape[0] < 3 or winding_number(loop) == 0:
+        return 0.0
+    return float(curve_distances(loop).min())
+
+
 def winding_number(loop: Any) -> Any:
     """How often the closed polygon ``loop`` (S, 2) winds around the origin,
     counter-clockwise positive: the sum of the angles its sides subtend, over 2 pi. An

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from design.fields.fieldmap import FieldMap
 from design.geometry import magnet_spacing
 from design.process import DEFAULT_PROCESS, PROCESSES
 
@@ -134,6 +135,41 @@ class ExternalMagnet:
 
 
 @dataclass(frozen=True)
+class Source:
+    """One field source of ``[[field.sources]]`` (docs/formats.md), superposed with the
+    others and the ``[external_magnet]``; its kind's quantities
+    (:data:`design.fields.sources.KINDS`) are set, the others keep their defaults.
+
+    kind : "uniform", "cylinder", "cuboid", "sphere", "coil" or "map".
+    b : uniform: the field vector. [T]
+    diameter, length : cylinder (and sphere: diameter) size. [m]
+    dimensions : cuboid side lengths along the base axes x, y, z. [m]
+    center : centre (map: where the map's origin lies), base frame. [m]
+    magnetization : unit magnetisation direction, base frame. [-]
+    remanence : remanent flux density. [T]
+    radius, turns, current, axis : coil: loop radius [m], number of turns [-], current per
+        turn [A], unit normal (right-hand rule) [-].
+    file : map: the grid file's path, as resolved when read.
+    fieldmap : map: the grid read from ``file``.
+    """
+
+    kind: str
+    b: Vector3 = (0.0, 0.0, 0.0)
+    diameter: float = 0.0
+    length: float = 0.0
+    dimensions: Vector3 = (0.0, 0.0, 0.0)
+    center: Vector3 = (0.0, 0.0, 0.0)
+    magnetization: Vector3 = (0.0, 0.0, 1.0)
+    remanence: float = 0.0
+    radius: float = 0.0
+    turns: float = 1.0
+    current: float = 0.0
+    axis: Vector3 = (0.0, 0.0, 1.0)
+    file: str = ""
+    fieldmap: FieldMap | None = field(default=None, repr=False)
+
+
+@dataclass(frozen=True)
 class Obstacle:
     """One rigid obstacle, base frame (:mod:`design.obstacles`).
 
@@ -166,11 +202,13 @@ class Environment:
 
 @dataclass(frozen=True)
 class Design:
-    """One robot and its set-up, as in a design file (docs/formats.md)."""
+    """One robot and its set-up, as in a design file (docs/formats.md). The field is the
+    ``external_magnet`` (None: the design has none) and the ``sources`` superposed."""
 
     name: str
     robot: Robot
     tip: Tip
-    external_magnet: ExternalMagnet
+    external_magnet: ExternalMagnet | None
     environment: Environment = field(default_factory=Environment)
     description: str = ""
+    sources: tuple[Source, ...] = ()

@@ -16,12 +16,14 @@ is in the quantity's file unit (:data:`FILE_UNITS`) with the unit's suffix on th
 
 from __future__ import annotations
 
+import re
 import warnings
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from design.fields.sources import KINDS, parameter_names
 from design.mounting import MAX_STOP_ANGLE
 from design.process import RESIN
 from design.records import Design
@@ -85,6 +87,8 @@ class Parameter:
         node: Any = design
         for part in path:
             node = getattr(node, part)
+            if node is None and part == "external_magnet":
+                return 0.0  # (no external magnet: the model's field leaves it out)
         if i is None:
             return float(node)
         return 0.0 if node is None else float(node[i])  # (no gravity: a zero vector)
@@ -380,11 +384,63 @@ def parameter_vector(design: Design) -> np.ndarray:
     return np.array([PARAMETERS[n].value(design) for n in NAMES], dtype=float)
 
 
+def source_names(design: Design) -> list[str]:
+    """The parameters of ``design``'s ``[[field.sources]]``, in their vector order (after
+    :data:`NAMES`): ``source<i>_<quantity>`` (:func:`design.fields.sources.parameter_names`)."""
+    return [n for i, src in enumerate(design.sources) for n in parameter_names(i + 1, src.kind)]
+
+
+def source_vector(design: Design) -> np.ndarray:
+    """The values of :func:`source_names` in ``design``, shape (k,). [SI]"""
+    out: list[float] = []
+    for src in design.sources:
+        for q in KINDS[src.kind]:
+            out.extend(np.ravel(getattr(src, q.name)).astype(float))
+    return np.array(out, dtype=float)
+
+
+def model_vector(design: Design) -> np.ndarray:
+    """The model's parameter vector of ``design``: :func:`parameter_vector` followed by
+    :func:`source_vector`, shape (len(NAMES) + k,). [SI]"""
+    return np.r_[parameter_vector(design), source_vector(design)]
+
+
+def source_parameter(name: str) -> tuple[int, str, int | None] | None:
+    """(source number, quantity, component) of a source parameter's name
+    (``source2_center_x`` -> (2, "center", 0)), or None if ``name`` is none."""
+    match = re.fullmatch(r"source(\d+)_([a-z]+?)(?:_([xyz]))?", name)
+    if not match:
+        return None
+    number, quantity, axis = match.groups()
+    return int(number), quantity, None if axis is None else "xyz".index(axis)
+
+
+def _with_source(design: Design, name: str, value: float) -> Design:
+    number, quantity, component = source_parameter(name) or (0, "", None)
+    if not 1 <= number <= len(design.sources):
+        raise KeyError(f"{name!r}: the design has {len(design.sources)} field sources")
+    src = design.sources[number - 1]
+    if quantity not in {q.name for q in KINDS[src.kind]}:
+        raise KeyError(f"{name!r}: a {src.kind} source has no {quantity}")
+    if component is None:
+        new = replace(src, **{quantity: float(value)})  # type: ignore[arg-type]
+    else:
+        vector = list(getattr(src, quantity))
+        vector[component] = float(value)
+        new = replace(src, **{quantity: tuple(vector)})  # type: ignore[arg-type]
+    sources = list(design.sources)
+    sources[number - 1] = new
+    return replace(design, sources=tuple(sources))
+
+
 def design_with(design: Design, values: dict[str, float]) -> Design:
     """``design`` with the named parameters set (SI): the inverse of
-    :func:`parameter_vector` for the parameters a design holds. A model-only factor (no
-    ``field``) or an unknown name is a KeyError."""
+    :func:`parameter_vector` and :func:`source_vector` for the parameters a design holds.
+    A model-only factor (no ``field``) or an unknown name is a KeyError."""
     for name, value in values.items():
+        if name not in PARAMETERS and source_parameter(name):
+            design = _with_source(design, name, value)
+            continue
         field = PARAMETERS[name].field if name in PARAMETERS else None
         if field is None:
             raise KeyError(f"{name!r} is not a quantity of a design")

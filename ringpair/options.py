@@ -411,6 +411,41 @@ def study_from(path: Path | None) -> Study:
         return default_study() if path is None else load_study(path)
 
 
+SCHEDULER_TIMEOUT = 3.0
+"""How long --scheduler's address is given to answer before any work. [s]"""
+
+
+def scheduler_from(address: str | None) -> str | None:
+    """--scheduler checked before any work: a ``tcp://host:port`` (or ``host:port``)
+    address that accepts a connection within SCHEDULER_TIMEOUT; UserError otherwise."""
+    if address is None:
+        return None
+    import socket
+    from urllib.parse import urlsplit
+
+    text = address.strip()
+    url = urlsplit(text if "://" in text else f"tcp://{text}")
+    try:
+        host, port = url.hostname, url.port
+    except ValueError:
+        host, port = None, None
+    if url.scheme not in ("tcp", "tls") or not host or port is None:
+        raise UserError(
+            f"--scheduler {address!r}: expected a Dask scheduler address tcp://host:port "
+            "(e.g. tcp://127.0.0.1:8786)"
+        )
+    try:
+        socket.create_connection((host, port), timeout=SCHEDULER_TIMEOUT).close()
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else exc.strerror or str(exc)
+        raise UserError(
+            f"--scheduler {address}: no Dask scheduler answers at {host}:{port} within "
+            f"{SCHEDULER_TIMEOUT:g} s ({reason}); start one or leave --scheduler out for a "
+            "local cluster"
+        ) from None
+    return text
+
+
 def base_file(study: Study) -> Path | None:
     """The base design file a study names (None for the embedded design): an input."""
     return None if study.base_source == "embedded" else Path(study.base_source)

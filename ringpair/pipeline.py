@@ -31,12 +31,10 @@ SI units inside; the report and the manifest say their units.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import platform
 import subprocess
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -49,7 +47,8 @@ from design import stored
 from design.atomic import write_text
 from design.designfile import save_design
 from design.equilibrium import solve_equilibria
-from design.geometry import disc_radius, rest_position
+from design.geometry import curve_disc_radius
+from design.home import HOME_COMMAND
 from design.made import made_design
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
@@ -58,6 +57,7 @@ from design.units import MM
 from design.workspace import Workspace, angle_grid, sweep_workspace
 from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
 from ringpair.report_notes import rounding_note
+from ringpair.runs import inputs_key, sha256, stage_path, stored_stage, tree_hash
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
 
 if TYPE_CHECKING:
@@ -153,50 +153,6 @@ class Run:
     """With measured data: what the study took from its diagnosis (:func:`calibrated_study`)."""
 
 
-def inputs_key(study: Study, study_text: str, data: Path | None) -> str:
-    """Identity of everything a study's stages depend on: the study file's text, the study
-    as resolved (its base design's values included), the bytes of the base design file it
-    names, the measured data set's files (when given) and the code
-    (:func:`optimize.sizing.pareto.code_digest`: version and source). [-]"""
-    from optimize.sizing.pareto import code_digest
-
-    named = Path(study.base_source) if study.base_source != "embedded" else None
-    base_file = sha256(named) if named is not None and named.is_file() else None
-    data_files = _tree_hash(data) if data is not None else None
-    return stored.digest(study_text, study, base_file, data_files, code_digest())
-
-
-def _stored(run: Run, name: str, key: str) -> tuple[Any, float] | None:
-    """A stage's stored (result, seconds) for ``key``, or None: not stored, or stored but
-    foreign, truncated or altered (then with a warning, and the stage runs again)."""
-    from optimize.sizing.pareto import PACKAGES
-
-    path = _stage_path(run, name, key)
-    if not path.exists():
-        return None
-    try:
-        value = stored.load(path, key, PACKAGES)
-    except stored.StoredError as exc:
-        warnings.warn(
-            f"{path}: not reused ({exc}); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
-        warnings.warn(
-            f"{path}: not reused (not a stage result); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    return value["result"], float(value["seconds"])
-
-
-def _stage_path(run: Run, name: str, key: str) -> Path:
-    return run.out / ".stages" / f"{name}-{key[:20]}.npz"
-
-
 def _stage(
     run: Run, name: str, what: str, inputs: tuple, work: Callable[[], Any], watch: Watch
 ) -> Any:
@@ -205,7 +161,7 @@ def _stage(
     seconds it took."""
     key = stored.digest(name, *inputs)
     watch.start(what)
-    old = _stored(run, name, key)
+    old = stored_stage(run.out, name, key)
     if old is not None:
         result, seconds = old
         run.reused[name] = True
@@ -216,7 +172,7 @@ def _stage(
         except Exception as exc:
             raise StageError(name, f"{type(exc).__name__}: {exc}", run) from exc
         seconds = time.perf_counter() - t0
-        stored.save(_stage_path(run, name, key), {"result": result, "seconds": seconds}, key)
+        stored.save(stage_path(run.out, name, key), {"result": result, "seconds": seconds}, key)
         run.reused[name] = False
     run.results[name] = result
     run.seconds[name] = seconds
@@ -227,7 +183,9 @@ def _stage(
 def tolerance_spread(
     design: Design, samples: int, seed: int, model: RingPairModel
 ) -> dict[str, Any]:
-    """Disc radius of ``samples`` perturbed copies of ``design`` [m] (TOLERANCES, seeded)."""
+    """The disc about home (the workspace's, :func:`design.geometry.curve_disc_radius` on
+    TOLERANCE_LOOP samples) of ``samples`` perturbed copies of ``design`` [m] (TOLERANCES,
+    seeded); NaN for a copy without a home state."""
     rng = np.random.default_rng(seed)
     base = model.parameters(design)
     params = np.repeat(base[:, None], samples, axis=1)
@@ -238,12 +196,15 @@ def tolerance_spread(
     loop = angle_grid(2 * np.pi / TOLERANCE_LOOP)
     theta = np.tile(loop, samples)
     eq = solve_equilibria(model, np.repeat(params, len(loop), axis=1), theta, theta)
-    rest = rest_position(design.robot.free_length)
+    home = solve_equilibria(
+        model, params, np.full(samples, HOME_COMMAND[0]), np.full(samples, HOME_COMMAND[1])
+    )
     radii = []
     for k in range(samples):
         rows = slice(k * len(loop), (k + 1) * len(loop))
         ok = eq.stable[rows]
-        radii.append(disc_radius((eq.position[rows][ok] - rest)[:, 1:]))
+        about = (eq.position[rows][ok] - home.position[k])[:, 1:]
+        radii.append(curve_disc_radius(about) if home.stable[k] else float("nan"))
     return {"disc_radius": np.array(radii), "samples": samples, "seed": seed}
 
 
@@ -342,14 +303,6 @@ def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str
     return replace(study, constraints=constraints), what
 
 
-def sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with path.open("rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 @lru_cache(maxsize=1)
 def versions() -> dict[str, str]:
     """Python, key packages and the project's git commit (if known)."""
@@ -445,15 +398,10 @@ def run_study(
     _stage(
         run,
         "forward",
-        "forward re-simulation with the model for design work (and its controllable disc)",
+        "forward re-simulation with the model for design work (and the disc steerable from home)",
         key,
-        lambda: {
-            "start": sweep_workspace(study.base, model=faithful),
-            "best": sweep_workspace(chosen, model=faithful),
-            "optimum": sweep_workspace(best.design, model=faithful),
-            "start_controllable": steerable_disc(study.base, faithful),
-            "best_controllable": steerable_disc(chosen, faithful),
-        },
+        lambda: _forward_pair(study.base, chosen, faithful)
+        | {"optimum": sweep_workspace(best.design, STEERABLE_STEP, faithful)},
         w,
     )
     _stage(
@@ -505,13 +453,48 @@ def forward_model(study: Study) -> RingPairModel:
     return RingPairModel(DEFAULT_EFFECTS)
 
 
-def steerable_disc(design: Design, model: RingPairModel) -> float:
-    """The disc about the rest position the robot can be steered over from rest without a
-    snap (:func:`design.controllable.controllable_disc_radius`, STEERABLE_STEP grid). [m]"""
-    from design.controllable import controllable_disc_radius
+def steerable_workspace(design: Design, model: RingPairModel) -> tuple[Workspace, Any]:
+    """The workspace of ``design`` about its home (STEERABLE_STEP grid) and its
+    controllable part (:func:`design.controllable.steerable`), whose ``disc_radius`` is the
+    disc: the disc about home the robot can be steered over without a snap."""
+    from design.controllable import steerable
 
-    p = model.parameters(design)
-    return controllable_disc_radius(model, p, design.robot.free_length, STEERABLE_STEP)
+    ws = sweep_workspace(design, STEERABLE_STEP, model)
+    return ws, steerable(ws, model, model.parameters(design))
+
+
+def _forward_pair(start: Design, best: Design, model: RingPairModel) -> dict[str, Any]:
+    """The forward stage: the start's and the recommended design's workspaces
+    (``start``, ``best``) and controllable parts (``start_controllable``,
+    ``best_controllable``), :func:`steerable_workspace`; where ``model`` leaves torsion out,
+    the recommended design's with it (``best_torsion``: the disc, droop, share steerable
+    from home, snaps; the transmissions' twist with the printed pieces' stops and
+    pre-twist as the design file has them). [SI]"""
+    ws_start, ctl_start = steerable_workspace(start, model)
+    ws_best, ctl_best = steerable_workspace(best, model)
+    out = {
+        "start": ws_start,
+        "best": ws_best,
+        "start_controllable": ctl_start,
+        "best_controllable": ctl_best,
+    }
+    if "torsion" not in model.effects:
+        # what the model leaves out, measured on the recommended design
+        twisted = RingPairModel(model.effects | {"torsion"})
+        t0 = time.perf_counter()
+        ws_t, ctl_t = steerable_workspace(best, twisted)
+        out["best_torsion"] = {
+            "effects": sorted(twisted.effects),
+            "disc_radius": ctl_t.disc_radius,
+            "workspace_disc_radius": ws_t.disc_radius,
+            "droop": ws_t.droop,
+            "home_stable": ws_t.home.stable,
+            "controllable_fraction": ctl_t.fraction,
+            "snapped": ws_t.n_snapped,
+            "configurations": len(ws_t.grid),
+            "seconds": time.perf_counter() - t0,
+        }
+    return out
 
 
 CARRIED = (
@@ -562,10 +545,12 @@ def _tip_note(design: Design, process: str) -> str:
 
 
 def headline(run: Run) -> str:
-    """The result in one paragraph: the recommended design's disc radius under the model
-    for design work against the start's, and where its design file and parts are."""
+    """The result in one paragraph: the recommended design's disc (about home, steerable
+    without a snap) under the model for design work against the start's, and where its
+    design file and parts are."""
     fwd = run.results["forward"]
-    start, best = fwd["start"].disc_radius / MM, fwd["best"].disc_radius / MM
+    start = fwd["start_controllable"].disc_radius / MM
+    best = fwd["best_controllable"].disc_radius / MM
     materials = [m for m in run.results["optimise"].materials if m]
     made = f" ({', '.join(materials)})" if materials else ""
     cad = run.results.get("cad")
@@ -591,11 +576,6 @@ def _cad_summary(report: Any) -> dict[str, Any]:
         "passed": report.passed,
         "timings_s": report.timings_s,
     }
-
-
-def _tree_hash(path: Path) -> str:
-    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-    return stored.digest(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
 
 
 def _diagnose(data: Path) -> dict[str, Any]:
@@ -633,7 +613,7 @@ def write_manifest(
         }
     }
     if data is not None:
-        inputs["data"] = {"path": str(data), "sha256": _tree_hash(data)}
+        inputs["data"] = {"path": str(data), "sha256": tree_hash(data)}
     files = sorted(
         p
         for p in run.out.rglob("*")

@@ -49,6 +49,8 @@ def _save(fig: plt.Figure, path: Path, dpi: int = 130) -> None:
 def _magnet_outline(ax: plt.Axes, design: Design, axes: tuple[int, int]) -> None:
     """Outline of the external cylinder projected on a base-frame plane (axis along x/y/z)."""
     ext = design.external_magnet
+    if ext is None:
+        return
     axis = np.abs(np.asarray(ext.magnetization))
     half = np.where(axis > 0.5, ext.length / 2, ext.diameter / 2)
     c = np.asarray(ext.center)
@@ -78,7 +80,8 @@ def plot_projection(
     )
     ax.scatter(pts[:, i], pts[:, j], s=3, color=REACH, label="reachable tips")
     _magnet_outline(ax, design, axes)
-    ax.plot(ws.rest_position[i] / MM, ws.rest_position[j] / MM, "k+", ms=12, label="rest")
+    ax.plot(ws.rest_position[i] / MM, ws.rest_position[j] / MM, "k+", ms=12, label="straight tip")
+    ax.plot(ws.home.position[i] / MM, ws.home.position[j] / MM, "kx", ms=9, label="home")
     ax.set_xlabel(f"{names[i]} [mm]")
     ax.set_ylabel(f"{names[j]} [mm]")
     ax.set_aspect("equal")
@@ -148,21 +151,23 @@ def plot_path(schedule: PathSchedule, path: Path, title: str) -> None:
 
 def plot_controllable(ws: Workspace, ctl: Controllable, path: Path, model: str) -> None:
     """The controllable workspace looking along the base x axis: the grid's tips that can
-    be steered to from rest without a snap, the others, and both discs."""
+    be steered to from home without a snap, the others, the disc about home and the
+    controllable cells' covered disc (deflection from the straight tip)."""
     fig, ax = plt.subplots(figsize=(6.4, 6))
     tip = (ctl.position - ws.rest_position)[:, :, 1:] / MM
+    home = (ws.home.position - ws.rest_position)[1:] / MM
     ok = np.isfinite(tip).all(axis=2)
     steerable, behind = tip[ok & ctl.controllable], tip[ok & ~ctl.controllable]
-    ax.scatter(steerable[:, 0], steerable[:, 1], s=4, color=REACH, label="steerable from rest")
+    ax.scatter(steerable[:, 0], steerable[:, 1], s=4, color=REACH, label="steerable from home")
     if len(behind):
         ax.scatter(behind[:, 0], behind[:, 1], s=6, color=LOOP, label="only through a snap")
     for radius, style, label in (
-        (ws.disc_radius, ":", "largest disc"),
-        (ctl.disc_radius, "--", "controllable disc"),
+        (ctl.disc_radius, "--", "the disc"),
+        (ctl.covered_disc_radius, ":", "covered by steerable cells"),
     ):
         ax.add_patch(
             Circle(
-                (0, 0),
+                tuple(home),
                 radius / MM,
                 fill=False,
                 ls=style,
@@ -170,7 +175,8 @@ def plot_controllable(ws: Workspace, ctl: Controllable, path: Path, model: str) 
                 label=f"{label}, r = {radius / MM:.2f} mm",
             )
         )
-    ax.plot(0, 0, "k+", ms=10)
+    ax.plot(0, 0, "k+", ms=10, label="straight tip")
+    ax.plot(*home, "kx", ms=8, label=f"home, droop {ws.droop / MM:.2f} mm")
     ax.set_xlabel("y deflection [mm]")
     ax.set_ylabel("z deflection [mm]")
     ax.set_aspect("equal", adjustable="datalim")
@@ -200,16 +206,19 @@ def plot_section(ws: Workspace, path: Path) -> None:
             lw=1.5,
             label=label,
         )
+    home = (ws.home.position - ws.rest_position)[1:] / MM
     ax.add_patch(
         Circle(
-            (0, 0),
+            tuple(home),
             ws.disc_radius / MM,
             fill=False,
             ls="--",
             color="k",
-            label=f"largest disc, r = {ws.disc_radius / MM:.2f} mm",
+            label=f"largest disc about home, r = {ws.disc_radius / MM:.2f} mm",
         )
     )
+    ax.plot(0, 0, "k+", ms=10, label="straight tip")
+    ax.plot(*home, "kx", ms=8, label=f"home, droop {ws.droop / MM:.2f} mm")
     tip = ws.max_direction * ws.max_deflection / MM
     ax.annotate(
         "", xy=(tip[1], tip[2]), xytext=(0, 0), arrowprops={"arrowstyle": "->", "color": "k"}
@@ -368,7 +377,12 @@ def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, pa
         ax.set_xlabel(label)
         ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
         ax.ticklabel_format(axis="y", useOffset=False)
-        ax.set_ylim(bottom=0, top=1.1 * np.nanmax(np.r_[obj, best_objective]))
+        finite = np.r_[obj, best_objective]
+        finite = finite[np.isfinite(finite)]
+        if finite.size:
+            ax.set_ylim(bottom=0, top=1.1 * finite.max())
+        else:  # every point of this sweep infeasible: an empty panel that says so
+            ax.text(0.5, 0.5, "no feasible point", transform=ax.transAxes, ha="center")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(f"Pareto fronts of '{study.name}'")
@@ -385,9 +399,9 @@ def binding(point: ParetoPoint, optimum: float) -> bool:
 
 
 def plot_workspaces(start: Workspace, best: Workspace, path: Path, model: str = "") -> None:
-    """Starting vs optimised reachable sets seen along x, around each rest position, each
-    with its parallel-ring loop and its largest disc; ``model`` names the model in the
-    title. [mm]"""
+    """Starting vs optimised reachable sets seen along x, from the straight tip, each with
+    its parallel-ring loop, its home and its largest disc about home; ``model`` names the
+    model in the title. [mm]"""
     fig, ax = plt.subplots(figsize=(6.5, 6))
     for ws, colour, name in ((start, "tab:gray", "start"), (best, "tab:blue", "optimum")):
         pts = (ws.reachable - ws.rest_position) / MM
@@ -395,13 +409,21 @@ def plot_workspaces(start: Workspace, best: Workspace, path: Path, model: str = 
         loop = (ws.parallel.position - ws.rest_position) / MM
         ax.plot(loop[:, 1], loop[:, 2], "-", color=colour, lw=1.5, label=f"{name}: boundary")
         r = ws.disc_radius / MM
+        home = (ws.home.position - ws.rest_position)[1:] / MM
         circle = Circle(
-            (0, 0), r, fill=False, ls="--", color=colour, label=f"{name}: disc r = {r:.2f} mm"
+            tuple(home),
+            r,
+            fill=False,
+            ls="--",
+            color=colour,
+            label=f"{name}: disc about home r = {r:.2f} mm",
         )
         ax.add_patch(circle)
+        ax.plot(*home, "x", color=colour, ms=8, label=f"{name}: home")
+    ax.plot(0, 0, "k+", ms=10, label="straight tip")
     ax.set_aspect("equal")
-    ax.set_xlabel("y - y_rest [mm]")
-    ax.set_ylabel("z - z_rest [mm]")
+    ax.set_xlabel("y - y_straight [mm]")
+    ax.set_ylabel("z - z_straight [mm]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")
     ax.set_title("Workspace seen along x" + (f"\n{model} model" if model else ""), fontsize=10)

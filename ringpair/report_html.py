@@ -55,7 +55,8 @@ from ringpair.tables import (
 )
 
 OBJECTIVE_WORDS = {
-    "disc_radius": "the largest disc of reachable tip positions around the rest tip (disc radius)",
+    "disc_radius": "the largest disc of tip positions about the robot's home (rings "
+    "antiparallel) that it can be steered over without a snap (the disc)",
     "area": "the area of the reachable set seen along x",
     "reach_ratio": "the roundness of the reachable set (smaller over larger reach)",
 }
@@ -191,12 +192,11 @@ def results(run: Run) -> dict[str, Any]:
         "active": list(best.active),
         "limits": limit_rows(best, run.results.get("sensitivity", [])),
         "pareto": front_notes(run),
-        "forward": {
-            "model": work_model,
-            "start_disc_radius_mm": start_ws.disc_radius / MM,
-            "best_disc_radius_mm": best_ws.disc_radius / MM,
-            "start_controllable_disc_radius_mm": fwd["start_controllable"] / MM,
-            "best_controllable_disc_radius_mm": fwd["best_controllable"] / MM,
+        "forward": {"model": work_model}
+        | _forward_numbers("start", start_ws, fwd["start_controllable"])
+        | _forward_numbers("best", best_ws, fwd["best_controllable"])
+        | _torsion_numbers(fwd.get("best_torsion"))
+        | {
             "unrounded_disc_radius_mm": fwd["optimum"].disc_radius / MM
             if "optimum" in fwd
             else None,
@@ -215,16 +215,77 @@ def results(run: Run) -> dict[str, Any]:
             "checks": len(run.results["cad"]["checks"]),
         },
         "timings_s": run.seconds,
+        "warnings": [
+            "disc_radius_mm is the disc about the robot's home (rings antiparallel, in the "
+            "model) that it can be steered over without a snap (issue 49); before, the disc "
+            "about the straight tip, now forward.*_straight_disc_radius_mm",
+            "forward.*_controllable_disc_radius_mm are deprecated: they equal "
+            "forward.*_disc_radius_mm",
+        ],
     }
     if "diagnosis" in run.results:
         doc["diagnosis"] = run.results["diagnosis"]
     return doc
 
 
+def _forward_numbers(which: str, ws: Any, ctl: Any) -> dict[str, Any]:
+    """One design's forward numbers: the disc (about home, steerable without a snap), the
+    home's droop, the reach beyond home, the straight-tip disc, the controllable share;
+    ``controllable_disc_radius_mm``, the old name of the disc, kept (equal). [mm]"""
+    return {
+        f"{which}_disc_radius_mm": ctl.disc_radius / MM,
+        f"{which}_controllable_disc_radius_mm": ctl.disc_radius / MM,
+        f"{which}_droop_mm": ws.droop / MM,
+        f"{which}_home_mm": [float(v) / MM for v in ws.home.position],
+        f"{which}_reach_mm": dict(
+            zip(("+y", "-y", "+z", "-z"), (r / MM for r in ws.reach), strict=True)
+        ),
+        f"{which}_straight_disc_radius_mm": ws.straight_disc_radius / MM,
+        f"{which}_controllable_fraction": ctl.fraction,
+    }
+
+
+def _torsion_numbers(t: dict[str, Any] | None) -> dict[str, Any]:
+    """The recommended design with torsion added to the model for design work (what that
+    model leaves out), in report units; empty where the model has torsion. [mm]"""
+    if t is None:
+        return {}
+    return {
+        "best_torsion": {
+            "effects": t["effects"],
+            "disc_radius_mm": t["disc_radius"] / MM,
+            "workspace_disc_radius_mm": t["workspace_disc_radius"] / MM,
+            "droop_mm": t["droop"] / MM,
+            "home_stable": t["home_stable"],
+            "controllable_fraction": t["controllable_fraction"],
+            "snapped": t["snapped"],
+            "configurations": t["configurations"],
+            "seconds": t["seconds"],
+        }
+    }
+
+
+def _left_out(f: dict[str, Any]) -> str:
+    """What the model for design work leaves out (torsion), and how much it moves the
+    recommended design's disc."""
+    t = f.get("best_torsion")
+    if t is None:
+        return ""
+    moved = t["disc_radius_mm"] - f["best_disc_radius_mm"]
+    return (
+        f"<br><b>Left out of the design model: torsion</b> (the transmissions' twist with "
+        f"the printed pieces' stops and pre-twist). With it the recommended design's disc "
+        f"is <b>{t['disc_radius_mm']:.2f} mm</b> ({moved:+.2f} mm), "
+        f"{100 * t['controllable_fraction']:.0f} % of the configurations steerable from home, "
+        f"{t['snapped']} of {t['configurations']} snapping, droop {t['droop_mm']:.1f} mm."
+    )
+
+
 def _question(run: Run, doc: dict[str, Any]) -> str:
     """The study's question in a paragraph: objective, set-up, free bounds, limits, model."""
     study, base = run.study, run.study.base
     ext = base.external_magnet
+    assert ext is not None, "a study designs for the external magnet"
     words = " and ".join(OBJECTIVE_WORDS.get(n, n) for n, _ in study.objective)
     free = [
         f"{r['quantity']} {r['low']:.3g}–{r['high']:.3g} {r['unit']}"
@@ -277,23 +338,29 @@ def _calibration_words(run: Run) -> str:
 
 
 def _answer(run: Run, doc: dict[str, Any]) -> str:
-    """The answer cards: disc radius under the study's model (the headline) and under the
-    model for design work, each against the start; the recommended design in one line."""
+    """The answer cards: the disc (about the robot's home, steerable without a snap) under
+    the model for design work, against the start, with the study's NLP's own measure of it
+    (and, where the study designed with another model, that model's disc on its own card);
+    the recommended design in one line."""
     s, b = doc["start"]["disc_radius_mm"], doc["best"]["disc_radius_mm"]
     f = doc["forward"]
+    fs, fb = f["start_disc_radius_mm"], f["best_disc_radius_mm"]
+    same = f["model"] == doc["model"]
     cards = [
-        f'<div class="card main"><div class=big id=headline>{b:.2f} mm</div>'
-        f"disc radius of the recommended design, {html.escape(doc['model'])} model (the "
-        f"study's)<br>start {s:.2f} mm: <b>{b - s:+.2f} mm ({100 * (b / s - 1):+.0f} %)</b>"
-        + (_steerable(f) if f["model"] == doc["model"] else "")
+        f'<div class="card main"><div class=big id=headline>{fb:.2f} mm</div>'
+        "the disc of the recommended design: the largest disc about its home that it can "
+        f"be steered over without a snap ({html.escape(f['model'])} model)<br>start "
+        f"{fs:.2f} mm: <b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>"
+        + (f"; the study's NLP: {b:.2f} mm (start {s:.2f} mm)" if same else "")
+        + _steerable(f)
+        + _left_out(f)
         + "</div>"
     ]
-    if f["model"] != doc["model"]:
-        fs, fb = f["start_disc_radius_mm"], f["best_disc_radius_mm"]
+    if not same:
         cards.append(
-            f"<div class=card><div class=big id=forward>{fb:.2f} mm</div>re-simulated with "
-            f"the model for design work ({html.escape(f['model'])})<br>start {fs:.2f} mm: "
-            f"<b>{fb - fs:+.2f} mm ({100 * (fb / fs - 1):+.0f} %)</b>{_steerable(f)}</div>"
+            f"<div class=card><div class=big id=study>{b:.2f} mm</div>disc about home in the "
+            f"study's own model ({html.escape(doc['model'])})<br>start {s:.2f} mm: "
+            f"<b>{b - s:+.2f} mm ({100 * (b / s - 1):+.0f} %)</b></div>"
         )
     d = made_design(run.results["optimise"].design)  # the hand-off, as best_design.toml
     cat, wire = doc["materials"]
@@ -316,11 +383,14 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
 
 
 def _steerable(f: dict[str, Any]) -> str:
-    """The controllable disc under the model for design work, start and recommended."""
-    cs, cb = f["start_controllable_disc_radius_mm"], f["best_controllable_disc_radius_mm"]
+    """The home's droop and the controllable share under the model for design work."""
+    r = f["best_reach_mm"]
     return (
-        f"<br>steerable from rest without a snap (controllable disc): <b>{cb:.2f} mm</b> "
-        f"(start {cs:.2f} mm)"
+        f"<br>about the robot's home (rings antiparallel), {f['best_droop_mm']:.1f} mm from "
+        f"the straight tip (start {f['start_droop_mm']:.1f} mm); reach beyond home "
+        f"+y {r['+y']:.1f}, −y {r['-y']:.1f}, +z {r['+z']:.1f}, −z {r['-z']:.1f} mm; "
+        f"{100 * f['best_controllable_fraction']:.0f} % of the configurations steerable "
+        "from home without a snap"
     )
 
 

@@ -1,6 +1,7 @@
-"""One run's folder is one run's: a lock against concurrent runs, a marker of a run in
-progress (so the next run and its manifest see one that was interrupted), and the removal
-of an earlier run's outputs that this run did not write again.
+"""One run's folder is one run's, and what a rerun reads back from it: a lock against
+concurrent runs, a marker of a run in progress (so the next run and its manifest see one
+that was interrupted), the removal of an earlier run's outputs that this run did not write
+again, and the stored results of a study's stages.
 
 The lock (``OUT/.ringpair.lock``, an advisory ``flock`` the kernel releases when the
 process ends, however it ends) refuses a second run into the same folder with a message
@@ -11,20 +12,28 @@ run that was interrupted or killed. Stale outputs are found from the earlier run
 since (so it is what ringpair wrote, not something edited or put there since), was not
 written by this run and is not part of a stage this run reused, is removed. Nothing else
 is ever removed.
+
+A study's stages are stored in ``OUT/.stages`` (:mod:`design.stored`) under the key of
+all their inputs (:func:`inputs_key`); :func:`stored_stage` reads one back or says, in a
+warning, why not.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import time
+import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from design import stored
 from design.atomic import write_text
+from optimize.sizing.studyfile import Study
 
 LOCK = ".ringpair.lock"
 RUNNING = ".ringpair-running.json"
@@ -51,8 +60,6 @@ class RunFolder:
         """Remove the files of the earlier run's manifest that are unchanged, not written
         by this run and not under a folder of ``reused`` (a reused stage's files, e.g.
         ``cad``); the relative paths removed."""
-        from ringpair.pipeline import sha256
-
         keep = tuple(f"{r}/" for r in reused)
         for entry in _listed(self.out / MANIFEST):
             rel = entry["path"]
@@ -138,4 +145,78 @@ def _marker(path: Path) -> dict[str, Any] | None:
     return doc if isinstance(doc, dict) else {}
 
 
-__all__ = ["LOCK", "RUNNING", "FolderBusy", "RunFolder", "run_folder"]
+# Stored stage results (design.stored) and the hashes of inputs.
+
+
+def sha256(path: Path) -> str:
+    """SHA-256 (hex) of the file at ``path``."""
+    h = hashlib.sha256()
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def tree_hash(path: Path) -> str:
+    """Identity of a file or a folder's files: names (relative) and SHA-256s."""
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    return stored.digest(*[(str(p.relative_to(path.parent)), sha256(p)) for p in files])
+
+
+def inputs_key(study: Study, study_text: str, data: Path | None) -> str:
+    """Identity of everything a study's stages depend on: the study file's text, the study
+    as resolved (its base design's values included), the bytes of the base design file it
+    names, the measured data set's files (when given) and the code
+    (:func:`optimize.sizing.pareto.code_digest`: version and source). [-]"""
+    from optimize.sizing.pareto import code_digest
+
+    named = Path(study.base_source) if study.base_source != "embedded" else None
+    base_file = sha256(named) if named is not None and named.is_file() else None
+    data_files = tree_hash(data) if data is not None else None
+    return stored.digest(study_text, study, base_file, data_files, code_digest())
+
+
+def stored_stage(out: Path, name: str, key: str) -> tuple[Any, float] | None:
+    """A stage's stored (result, seconds) for ``key``, or None: not stored, or stored but
+    foreign, truncated or altered (then with a warning, and the stage runs again)."""
+    from optimize.sizing.pareto import PACKAGES
+
+    path = stage_path(out, name, key)
+    if not path.exists():
+        return None
+    try:
+        value = stored.load(path, key, PACKAGES)
+    except stored.StoredError as exc:
+        warnings.warn(
+            f"{path}: not reused ({exc}); stage '{name}' runs again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
+        warnings.warn(
+            f"{path}: not reused (not a stage result); stage '{name}' runs again",
+            stored.StoredWarning,
+            stacklevel=2,
+        )
+        return None
+    return value["result"], float(value["seconds"])
+
+
+def stage_path(out: Path, name: str, key: str) -> Path:
+    """Where stage ``name``'s result for ``key`` is stored in the folder ``out``."""
+    return out / ".stages" / f"{name}-{key[:20]}.npz"
+
+
+__all__ = [
+    "LOCK",
+    "RUNNING",
+    "FolderBusy",
+    "RunFolder",
+    "inputs_key",
+    "run_folder",
+    "sha256",
+    "stage_path",
+    "stored_stage",
+    "tree_hash",
+]

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from design.atomic import write_text
-from design.designfile import dumps_design, load_design
+from design.designfile import dumps_design, load_design, read_regular
 from design.records import Design
 from design.suggest import did_you_mean
 from design.units import DEG, MM
@@ -167,7 +167,7 @@ def load_measurements(path: str | os.PathLike[str]) -> Measurements:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        text = read_regular(p, encoding="utf-8-sig")
     except FileNotFoundError:
         raise MeasurementError(f"measurement file {p} does not exist") from None
     except IsADirectoryError:

@@ -16,10 +16,12 @@ Formulation (one material combination, one start):
   configuration's residual, pose and internal loads are one function of the model,
   compiled with its Jacobian (:mod:`design.compiled`) and mapped over the configurations.
 - Objectives (maximised; several are weighted after division by their base-design value):
-  ``disc_radius``: rho <= the distance from p_rest to each side of the parallel loop
-  seen along x (:func:`design.geometry.segment_distances`; the largest disc around the
-  rest position inside the loop, :func:`design.geometry.disc_radius`, as the workspace
-  measures it); ``area``: the shoelace
+  ``disc_radius``: rho <= the distance from the robot's home (:mod:`design.home`: the
+  first antiparallel sample, theta1 = pi, theta2 = 0, solved with the others) to each arc
+  of the smooth curve through the parallel loop's samples seen along x
+  (:func:`design.geometry.curve_distances`; the largest disc about home inside the loop,
+  :func:`design.geometry.curve_disc_radius`, as the forward workspace measures it on its
+  720 samples); ``area``: the shoelace
   area of the parallel loop (seen along x); ``reach_ratio``: t <= w_z / w_y and
   t <= w_y / w_z with the y and z widths of the loop (smooth maxima in the NLP, exact
   sample maxima when reported).
@@ -39,8 +41,8 @@ Formulation (one material combination, one start):
   :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
   bounding sphere); the neutral deflection within tolerance (each antiparallel tip's
   distance from the tip at rest with the field off: how well the rings cancel; the sag
-  under the robot's own weight is the ``sag`` metric, and shifts the loop about the
-  straight tip, which the disc radius measures); optional lower bounds on
+  under the robot's own weight is the ``sag`` metric; the disc is about the home, which
+  sags with the loop); optional lower bounds on
   disc radius and reach ratio; epsilon bounds (Pareto) on the catheter diameter, the
   magnet distance and the magnet volume. After the solve every sampled equilibrium must
   be the state the robot reaches there (:func:`design.solve_equilibria`: stable and
@@ -64,12 +66,13 @@ import numpy as np
 
 from design.compiled import compile_functions
 from design.geometry import (
-    disc_radius,
+    curve_disc_radius,
+    curve_distances,
     external_distance,
     magnet_centre_at,
     rest_position,
-    segment_distances,
 )
+from design.home import HOME_COMMAND
 from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.registry import NAMES, index
@@ -97,12 +100,18 @@ METRICS = (
     "external_distance",
     "catheter_outer_diameter",
     "sag",
+    "droop",
+    "straight_disc_radius",
 )
 """Workspace and design metrics reported for every solution, SI (m, m^2, -, m^3).
-``neutral_deflection``: the largest distance of an antiparallel-ring tip from the tip at
-rest with the field off (how well the rings cancel); ``sag``: that rest tip's distance
-from the straight robot's (its own weight); the workspace (disc, reach) is measured from
-the straight robot's tip."""
+``disc_radius``: the largest disc about the robot's home (:mod:`design.home`: the first
+antiparallel sample, theta1 = pi, theta2 = 0) inside the smooth curve through the
+parallel loop's samples (:func:`design.geometry.curve_disc_radius`, the forward
+workspace's measure); ``neutral_deflection``: the largest distance of an antiparallel-ring
+tip from the tip at rest with the field off (how well the rings cancel); ``sag``: that
+rest tip's distance from the straight robot's (its own weight); ``droop``: the home's
+distance from the straight robot's tip; ``straight_disc_radius``: the disc about the
+straight tip (the measure before issue 49)."""
 
 # group: (file-unit scale, unit label, meaning)
 GROUPS: dict[str, tuple[float, str, str]] = {
@@ -146,9 +155,11 @@ def commands(shape: NlpShape) -> np.ndarray:
     k, kn = shape.configurations, shape.neutral_configurations
     phi = 2 * np.pi * np.arange(k) / k
     psi = 2 * np.pi * np.arange(kn) / kn
-    return np.vstack(
+    out = np.vstack(
         [np.concatenate([phi, psi + np.pi, psi + np.pi / 2]), np.concatenate([phi, psi, psi])]
     )
+    assert tuple(out[:, k]) == HOME_COMMAND  # the first antiparallel sample is the home
+    return out
 
 
 def _params_expression(free: tuple[str, ...], v: ca.SX, base: ca.SX) -> ca.SX:
@@ -441,16 +452,18 @@ def _outcome(
     g = ca.vertcat(ca.vec(rows_k[:, : k_all - 1]), neutral_distance, g_design)
     groups = column_groups * (k_all - 1) + ("neutral",) * kn + design_groups
 
-    d = deflection[1:, :k_par]  # (2, K), y and z of the parallel loop
-    dist = ca.sqrt(ca.sum1(d * d) + TINY**2).T
-    sides = segment_distances(d.T)
+    home = deflection[:, k_par]  # the first antiparallel sample: HOME_COMMAND
+    straight = deflection[1:, :k_par]  # (2, K), y and z of the parallel loop
+    d = straight - ca.repmat(home[1:], 1, k_par)  # about home
+    dist = ca.sqrt(ca.sum1(straight * straight) + TINY**2).T
+    sides = curve_distances(d.T)
     area_signed = 0.5 * ca.sum2(
         d[0, :] * ca.horzcat(d[1, 1:], d[1, 0]) - ca.horzcat(d[0, 1:], d[0, 0]) * d[1, :]
     )
     reach_y = (ca.mmax(d[0, :]) - ca.mmin(d[0, :])) / 2
     reach_z = (ca.mmax(d[1, :]) - ca.mmin(d[1, :])) / 2
     metrics = ca.vertcat(
-        disc_radius(d.T),
+        curve_disc_radius(d.T),
         ca.fabs(area_signed),
         reach_y,
         reach_z,
@@ -461,6 +474,8 @@ def _outcome(
         distance,
         catheter,
         ca.sqrt(ca.sumsqr(rest) + TINY**2),
+        ca.sqrt(ca.sumsqr(home) + TINY**2),
+        curve_disc_radius(straight.T),
     )
     widths = ca.vertcat(
         _smooth_max(d[0, :].T, scale) + _smooth_max(-d[0, :].T, scale),

@@ -77,8 +77,9 @@ range_mm = [1.0, 4.0]                     # optional; range_mm3 for magnet_volum
                                           # rings); default: from the free bounds
 ```
 
-Objectives: ``disc_radius`` is the radius of the largest disc around the rest position
-inside the reachable set (the parallel-ring loop, as :mod:`design.workspace` defines it),
+Objectives: ``disc_radius`` is the radius of the largest disc about the robot's home
+(:mod:`design.home`) inside the reachable set (the parallel-ring loop, as
+:mod:`design.workspace` defines it),
 ``area`` the area of that loop (seen along x), ``reach_ratio`` the ratio of the smaller
 to the larger reach (y against z; 1 is round).
 """
@@ -154,8 +155,8 @@ FREE_KEYS: dict[str, FreeKey] = {
 
 OBJECTIVES = ("disc_radius", "area", "reach_ratio", "controllable_disc_radius")
 """``controllable_disc_radius``: the NLP maximises the disc radius; among its accepted
-starts and materials the design whose controllable disc (steerable from rest without a
-snap, :mod:`design.controllable`) is largest wins; alone, not weighted with others."""
+starts and materials the design whose disc steerable from home without a snap
+(:mod:`design.controllable`) is largest wins; alone, not weighted with others."""
 PARETO_QUANTITIES = {
     # name: (range key, scale, sense of the epsilon constraint)
     "catheter_outer_diameter": ("range_mm", MM, "max"),
@@ -581,6 +582,8 @@ def loads_study(text: str, source: str = "<string>", folder: Path | None = None)
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise StudyError(f"{source}: arrays or tables nested too deeply to read") from None
     try:
         return study_from_dict(doc, folder)
     except StudyError as exc:

@@ -55,7 +55,13 @@ REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
 )
 @path_option("--report", help="Directory for residual plots before/after and diagnosis.html.")
 @click.option("--folds", default=5, show_default=True, help="Cross-validation folds.")
-@click.option("--seed", default=0, show_default=True, help="Seed of the fold assignment.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, 2**32 - 1),
+    default=0,
+    show_default=True,
+    help="Seed of the fold assignment.",
+)
 @click.option(
     "--max-rows",
     type=click.IntRange(1, None),

@@ -27,6 +27,7 @@ from ringpair.options import (
     output_path,
     path_option,
     progress,
+    scheduler_from,
     study_from,
 )
 from ringpair.tables import write_pareto_csvs
@@ -65,6 +66,8 @@ def optimize(
     from ringpair.plots import plot_fronts, plot_workspaces
 
     study = study_from(study_path)
+    if study.pareto and not no_pareto:
+        scheduler = scheduler_from(scheduler)
     if workers < 1:
         raise UserError(f"--workers must be at least 1; got {workers}")
     out = output_path(

@@ -14,6 +14,24 @@ from design.units import MM
 from ringpair.options import DESIGN, FORCE, console, design_from, output_path, path_option
 
 
+def _source_words(source) -> str:
+    """One line of a field source's numbers, in file units."""
+    from design.fields.sources import KINDS
+
+    parts = []
+    for q in KINDS[source.kind]:
+        value = getattr(source, q.name)
+        text = (
+            "[" + ", ".join(f"{v / q.scale:g}" for v in value) + "]"
+            if q.size == 3
+            else f"{value / q.scale:g}"
+        )
+        parts.append(f"{q.key} {text}")
+    if source.kind == "map":
+        parts.append(f"file {source.file}")
+    return f"{source.kind}: " + ", ".join(parts)
+
+
 @click.command()
 @DESIGN
 @path_option(
@@ -41,12 +59,16 @@ def show(design: Path | None, save: Path | None, force: bool) -> None:
         ("torsional rigidity GJ wire", f"{tube_torsional_rigidity(r.wire):.4g} N m^2"),
         ("ring moment (each)", f"{m_ring:.4g} A m^2"),
         ("ring centre spacing", f"{t.spacing / MM:g} mm"),
-        (
-            "external magnet moment",
-            f"{cylinder_moment(e.diameter, e.length, e.remanence):.4g} A m^2",
-        ),
-        ("external magnet centre", "[" + ", ".join(f"{c / MM:g}" for c in e.center) + "] mm"),
     ]
+    if e is not None:
+        rows += [
+            (
+                "external magnet moment",
+                f"{cylinder_moment(e.diameter, e.length, e.remanence):.4g} A m^2",
+            ),
+            ("external magnet centre", "[" + ", ".join(f"{c / MM:g}" for c in e.center) + "] mm"),
+        ]
+    rows += [(f"field source {i + 1}", _source_words(s)) for i, s in enumerate(d.sources)]
     for k, v in rows:
         table.add_row(k, v)
     console.print(table)

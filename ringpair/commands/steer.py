@@ -12,6 +12,8 @@ import numpy as np
 from rich.table import Table
 
 from cad.layout import ActuatorSpec
+from design.designfile import read_regular
+from design.home import solve_home
 from design.model import RingPairModel
 from design.paths import (
     PathSchedule,
@@ -21,7 +23,6 @@ from design.paths import (
     follow,
     largest_ellipse,
     line,
-    workspace_center,
 )
 from design.records import Design
 from design.steering import REACHED, Steering, steer
@@ -101,7 +102,7 @@ def parse_target(text: str, where: str) -> tuple[float, float]:
 def read_targets(path: Path) -> list[tuple[float, float]]:
     """Targets from a CSV with columns y_mm, z_mm (lines starting with # are comments). [mm]"""
     try:
-        lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+        lines = [line for line in read_regular(path).splitlines() if not line.startswith("#")]
     except (OSError, UnicodeDecodeError) as exc:
         raise UserError(f"--targets: cannot read {path}: {exc}") from None
     reader = csv.DictReader(lines)
@@ -178,8 +179,9 @@ def steer_rows(result: Steering) -> list[dict]:
     "--center",
     metavar="Y,Z",
     default=None,
-    help="Centre of a circle or ellipse in mm (default: the workspace's centre, the mean "
-    "tip with the rings parallel).",
+    help="Centre of a circle or ellipse in mm (default: the robot's home, the tip with the "
+    "rings antiparallel, theta1 = 180, theta2 = 0 deg; ellipse:largest is about the "
+    "workspace's centre, the mean tip with the rings parallel).",
 )
 @click.option("--closed", is_flag=True, help="A CSV path returns to its first point.")
 @path_option(
@@ -222,7 +224,7 @@ def steer_command(
     z_mm (the driven tip), error_mm, reached, snapped (the move into this point snapped).
     """
     d = design_from(design)
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     if path_spec is not None:
         if to or targets is not None:
             raise UserError("--path drives along a path; give it without --to or --targets")
@@ -372,8 +374,10 @@ def _steer_path(
             wanted = schedule.points / MM
         else:
             if center is None and not spec.lower().startswith("line"):
-                y, z = workspace_center(model, params)
-                center = (y / MM, z / MM)
+                home = solve_home(model, params, d.robot.free_length)  # issue 49
+                if not home.stable:
+                    raise UserError(f"--center: the robot has no home ({home.state.failure[0]})")
+                center = (home.position[1] / MM, home.position[2] / MM)
             wanted, closed = parse_path(spec, count, center)
         _within_reach(d, [tuple(p) for p in wanted])
         if schedule is None:

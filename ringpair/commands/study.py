@@ -25,20 +25,25 @@ from rich.progress import (
 )
 from rich.text import Text
 
+from design.designfile import read_regular
 from optimize.sizing.studyfile import Study
 from ringpair.options import (
     OVERWRITE_POLICY,
+    ROW_BYTES,
     SCHEDULER,
+    SOLVE_RATE,
     STUDY,
     UserError,
     bad_input,
     base_file,
     console,
     default_out,
+    duration,
     err_console,
     output_path,
     path_option,
     print_error,
+    scheduler_from,
     study_from,
     warn,
 )
@@ -47,6 +52,9 @@ from ringpair.runs import RunFolder
 FILES = ("report.html", "results.json", "manifest.json", "best_design.toml")
 """What ``study`` writes in its folder besides each stage's files."""
 REPORT = "report: page, figures, PDF"
+MAX_SAMPLES = 100_000
+"""Most tolerance Monte Carlo samples a study takes (12 million configurations, about an
+hour at SOLVE_RATE)."""
 
 
 class _Stages:
@@ -120,7 +128,13 @@ def _process(name: str) -> str:
     "to diagnose.",
 )
 @click.option("--samples", default=200, show_default=True, help="Tolerance Monte Carlo samples.")
-@click.option("--seed", default=0, show_default=True, help="Seed of the Monte Carlo.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, 2**32 - 1),
+    default=0,
+    show_default=True,
+    help="Seed of the Monte Carlo.",
+)
 @click.option(
     "--workers",
     type=click.IntRange(1, None),
@@ -168,13 +182,22 @@ def study(
     from ringpair.runs import FolderBusy, run_folder
 
     with bad_input(OSError, UnicodeDecodeError):
-        text = study_path.read_text() if study_path else ""
+        text = read_regular(study_path) if study_path else ""
     s = study_from(study_path)
     if data is not None and not (data / "measurements.csv").is_file():
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
-    if samples < 2:
-        raise UserError(f"--samples must be at least 2; got {samples}")
+    from ringpair.pipeline import TOLERANCE_LOOP
+
+    if not 2 <= samples <= MAX_SAMPLES:
+        raise UserError(
+            f"--samples must be between 2 and {MAX_SAMPLES:,}; got {samples:,} (each sample "
+            f"solves {TOLERANCE_LOOP} configurations: about "
+            f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} and "
+            f"{samples * TOLERANCE_LOOP * ROW_BYTES / 1e9:.3g} GB)"
+        )
     process = _process(process)
+    if s.pareto:
+        scheduler = scheduler_from(scheduler)
     out = output_path(
         out or default_out(s.name),
         "--out",

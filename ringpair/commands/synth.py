@@ -95,7 +95,13 @@ def _measured_elsewhere(path: Path) -> bool:
     show_default=True,
     help="One-sigma Gaussian tracker noise on each measured coordinate [mm].",
 )
-@click.option("--seed", type=int, default=1, show_default=True, help="Seed of the noise.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, 2**32 - 1),
+    default=1,
+    show_default=True,
+    help="Seed of the noise.",
+)
 @path_option(
     "--out",
     help="Data-set folder to write (design.toml + measurements.csv). "

@@ -9,7 +9,7 @@ import numpy as np
 from rich.table import Table
 
 from design.atomic import write_text
-from design.controllable import Controllable, controllable_workspace
+from design.controllable import Controllable, steerable
 from design.equilibrium import solve_design
 from design.records import Design
 from design.stiffness import tip_stiffness
@@ -67,11 +67,13 @@ def workspace(
 ) -> None:
     """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
 
-    Prints the deflection range along y and z, the largest deflection and its direction,
-    the radius of the largest disc around the rest position inside the reachable set
-    (size and symmetry in one number), how much of that disc can be steered to from rest
-    without a snap (the controllable workspace: neighbouring configurations driven into
-    each other, from antiparallel rings) and the neutral (antiparallel) deflection; writes
+    Prints the robot's home (the rings antiparallel, theta1 = 180, theta2 = 0 deg, in the
+    model: gravity and the printed tip included) and its droop from the straight tip, the
+    disc (the largest disc about home the robot can be steered over from home without a
+    snap: size and symmetry in one number; the controllable workspace drives neighbouring
+    configurations into each other), the reach beyond home in each direction, the
+    deflection range along y and z and the largest deflection and its direction, the disc
+    about the straight tip and the neutral (antiparallel) deflection; writes
     workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z),
     deflection.png (deflection against theta1 with theta2 = 0) and controllable.png.
     """
@@ -83,7 +85,7 @@ def workspace(
             "workspace: the full-turn map with environment.obstacles is not made yet; "
             "`ringpair simulate` solves configurations pressed on them"
         )
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     check_configurations(len(angle_grid(np.deg2rad(step))) ** 2, max_configs, "--step")
     out = output_path(
         out or default_out(d.name, "workspace"),
@@ -98,9 +100,7 @@ def workspace(
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
     with progress("driving between neighbouring configurations (the controllable workspace)"):
-        ctl = controllable_workspace(
-            model, model.parameters(d), ws.grid, angle_grid(np.deg2rad(step)), ws.rest_position
-        )
+        ctl = steerable(ws, model, model.parameters(d))
     write_csv(
         out / "workspace.csv",
         pose_rows(ws.grid, ws.rest_position, tip_stiffness(model, model.parameters(d), ws.grid)),
@@ -118,13 +118,27 @@ def workspace(
     )
 
 
+RENAMED = {
+    "controllable_disc_radius_mm": "disc_radius_mm",
+}
+"""Keys of summary.json kept for readers of earlier versions: old name -> the key it equals
+(a warning in ``warnings`` says so)."""
+WARNINGS = (
+    "disc_radius_mm is the disc about the robot's home (rings antiparallel, in the model) "
+    "that it can be steered over from home without a snap (issue 49); before, it was the "
+    "disc about the straight, weightless tip, now straight_disc_radius_mm",
+    "controllable_disc_radius_mm is deprecated: it equals disc_radius_mm",
+)
+
+
 def workspace_summary(
     ws: Workspace, design: Design, step_deg: float, model: str, ctl: Controllable | None = None
 ) -> dict:
     """The workspace metrics in file units (mm, deg); with ``ctl``, the controllable
-    workspace's too."""
+    workspace's too and the disc capped by it."""
     direction = ws.max_direction
-    return {
+    disc = ws.disc_radius if ctl is None else ctl.disc_radius
+    out = {
         "design": design.name,
         "model": model,
         "grid_step_deg": step_deg,
@@ -133,6 +147,13 @@ def workspace_summary(
         "snapped": ws.n_snapped,
         "multistable": ws.n_multistable,
         "free_length_mm": design.robot.free_length / MM,
+        "disc_radius_mm": disc / MM,
+        "home_mm": [float(v) / MM for v in ws.home.position],
+        "home_stable": ws.home.stable,
+        "droop_mm": ws.droop / MM,
+        "reach_mm": dict(zip(("+y", "-y", "+z", "-z"), (r / MM for r in ws.reach), strict=True)),
+        "workspace_disc_radius_mm": ws.disc_radius / MM,
+        "straight_disc_radius_mm": ws.straight_disc_radius / MM,
         "y_range_mm": [v / MM for v in ws.y_range],
         "z_range_mm": [v / MM for v in ws.z_range],
         "max_deflection_mm": ws.max_deflection / MM,
@@ -140,17 +161,18 @@ def workspace_summary(
         "max_deflection_direction": [float(c) for c in direction],
         "max_deflection_direction_deg": float(np.rad2deg(np.arctan2(direction[2], direction[1]))),
         "max_deflection_theta_deg": [float(np.rad2deg(a)) for a in ws.max_angles],
-        "disc_radius_mm": ws.disc_radius / MM,
         "neutral_deflection_mm": ws.neutral_deflection / MM,
         "boundary_excess_mm": ws.boundary_excess / MM,
-    } | (
-        {}
-        if ctl is None
-        else {
-            "controllable_disc_radius_mm": ctl.disc_radius / MM,
+    }
+    if ctl is not None:
+        out |= {
+            "covered_disc_radius_mm": ctl.covered_disc_radius / MM,
+            "covered_resolution_mm": ctl.resolution / MM,
             "controllable_fraction": ctl.fraction,
         }
-    )
+        out |= {old: out[new] for old, new in RENAMED.items()}
+    out["warnings"] = list(WARNINGS[: 1 + (ctl is not None)])
+    return out
 
 
 def _print_summary(s: dict) -> None:
@@ -160,6 +182,14 @@ def _print_summary(s: dict) -> None:
     table.add_row(
         "configurations (without a state / snapped / multistable)",
         f"{s['configurations']} ({s['without_state']} / {s['snapped']} / {s['multistable']})",
+    )
+    table.add_row(
+        "home (rings antiparallel): droop from the straight tip", f"{s['droop_mm']:.2f} mm"
+    )
+    table.add_row("the disc about home, steerable without a snap", f"{s['disc_radius_mm']:.2f} mm")
+    table.add_row(
+        "reach beyond home +y / -y / +z / -z",
+        " / ".join(f"{v:.2f}" for v in s["reach_mm"].values()) + " mm",
     )
     table.add_row("deflection range along y", "{:.2f} .. {:.2f} mm".format(*s["y_range_mm"]))
     table.add_row("deflection range along z", "{:.2f} .. {:.2f} mm".format(*s["z_range_mm"]))
@@ -174,14 +204,12 @@ def _print_summary(s: dict) -> None:
     table.add_row(
         "  at theta1, theta2", "{:.1f}, {:.1f} deg".format(*s["max_deflection_theta_deg"])
     )
-    table.add_row("largest disc around rest (radius)", f"{s['disc_radius_mm']:.2f} mm")
-    if "controllable_disc_radius_mm" in s:
+    table.add_row(
+        "largest disc about the straight tip (radius)", f"{s['straight_disc_radius_mm']:.2f} mm"
+    )
+    if "controllable_fraction" in s:
         table.add_row(
-            "  of it steerable from rest without a snap (radius)",
-            f"{s['controllable_disc_radius_mm']:.2f} mm",
-        )
-        table.add_row(
-            "configurations steerable from rest", f"{100 * s['controllable_fraction']:.1f} %"
+            "configurations steerable from home", f"{100 * s['controllable_fraction']:.1f} %"
         )
     table.add_row("neutral (antiparallel) deflection", f"{s['neutral_deflection_mm']:.3f} mm")
     console.print(table)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from setups import random_design
 
-from design.controllable import MOVES, _reached, controllable_workspace
+from design.controllable import MOVES, _reached, controllable_workspace, steerable
 from design.designfile import default_design
 from design.equilibrium import solve_sequence
 from design.model import model_for
@@ -97,16 +97,16 @@ def test_links_are_the_driven_path_solvers_snap_free_moves(seed, effects):
 
 def test_demonstrator_baseline_is_all_controllable_and_its_disc_is_the_workspace_disc():
     """Nothing snaps on the demonstrator's axisymmetric baseline: every configuration is
-    controllable, and the controllable disc is the workspace's disc radius less at most the
-    5-deg grid's chord (R (1 - cos 2.5 deg)) and a raster pixel."""
+    controllable, the cells' covered disc about home is the workspace's disc less at most
+    the 5-deg grid's chord (R (1 - cos 2.5 deg)) and two raster pixels, and so the disc is
+    the workspace's."""
     design = default_design()
     model = model_for(frozenset())
     step = np.deg2rad(5.0)
     ws = sweep_workspace(design, step, model)
-    ctl = controllable_workspace(
-        model, model.parameters(design), ws.grid, angle_grid(step), ws.rest_position
-    )
+    ctl = steerable(ws, model, model.parameters(design))
     assert ctl.fraction == 1.0 and ctl.linked.all()
-    chord = ws.disc_radius * (1 - np.cos(step / 2))
-    pixel = 2 * 1.05 * ws.max_deflection / 400
-    assert ws.disc_radius - chord - 2 * pixel <= ctl.disc_radius <= ws.disc_radius
+    chord = ws.max_deflection * (1 - np.cos(step / 2))
+    pixel = 2 * 1.05 * (ws.max_deflection + ws.droop) / 400
+    assert ws.disc_radius - chord - 2 * pixel <= ctl.covered_disc_radius <= ws.disc_radius
+    assert ctl.disc_radius == ws.disc_radius

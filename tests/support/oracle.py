@@ -168,33 +168,87 @@ def robot(design: Design, printed: bool = False) -> Robot:
 
 
 class Field:
-    """B at points (k, 3) of the external magnet: magpylib's cylinder, or its dipole."""
+    """B at points (k, 3) of the design's field: the external magnet (magpylib's cylinder,
+    or its dipole) and the field sources (magpylib's Cuboid, Sphere, Cylinder and Circle,
+    or for a permanent magnet without ``near_field`` its numpy dipole; a uniform field),
+    superposed (field maps are not modelled here)."""
 
     def __init__(self, design: Design, near: bool) -> None:
-        e = design.external_magnet
         self.near = near
-        axis = np.asarray(e.magnetization, float)
-        axis = axis / np.linalg.norm(axis)
-        self.centre = np.asarray(e.center, float)
-        volume = np.pi * e.diameter**2 / 4 * e.length
-        self.moment = e.remanence / MU0 * volume * axis
-        self.axis, self.radius, self.half = axis, e.diameter / 2, e.length / 2
-        self.remanence = e.remanence
+        self.magnets: list[tuple[np.ndarray, np.ndarray]] = []  # (centre, moment) dipoles
+        self.objects: list = []  # magpylib sources
+        self.uniform = np.zeros(3)
+        self.cylinder = None
+        e = design.external_magnet
+        if e is not None:
+            axis = np.asarray(e.magnetization, float)
+            axis = axis / np.linalg.norm(axis)
+            volume = np.pi * e.diameter**2 / 4 * e.length
+            if near:
+                self.cylinder = (np.asarray(e.center, float), axis, e.diameter / 2,
+                                 e.length / 2, e.remanence)  # fmt: skip
+            else:
+                self.magnets.append(
+                    (np.asarray(e.center, float), e.remanence / MU0 * volume * axis)
+                )
+        for src in design.sources:
+            self._add(src)
+
+    def _add(self, src) -> None:
+        centre = np.asarray(src.center, float)
+        mag = np.asarray(src.magnetization, float)
+        if src.kind == "uniform":
+            self.uniform = self.uniform + np.asarray(src.b, float)
+        elif src.kind == "coil":
+            rot, _ = Rotation.align_vectors([src.axis], [[0.0, 0.0, 1.0]])
+            self.objects.append(magpy.current.Circle(
+                current=src.turns * src.current, diameter=2 * src.radius, position=centre,
+                orientation=rot,
+            ))  # fmt: skip
+        elif src.kind == "sphere" or (src.kind in ("cuboid", "cylinder") and self.near):
+            pol = src.remanence * mag
+            if src.kind == "sphere":
+                self.objects.append(magpy.magnet.Sphere(
+                    polarization=pol, diameter=src.diameter, position=centre))  # fmt: skip
+            elif src.kind == "cuboid":
+                self.objects.append(magpy.magnet.Cuboid(
+                    polarization=pol, dimension=src.dimensions, position=centre))  # fmt: skip
+            else:
+                rot, _ = Rotation.align_vectors([mag], [[0.0, 0.0, 1.0]])
+                self.objects.append(magpy.magnet.Cylinder(
+                    polarization=(0, 0, src.remanence), dimension=(src.diameter, src.length),
+                    position=centre, orientation=rot,
+                ))  # fmt: skip
+        elif src.kind in ("cuboid", "cylinder"):
+            if src.kind == "cuboid":
+                volume = float(np.prod(src.dimensions))
+            else:
+                volume = np.pi * src.diameter**2 / 4 * src.length
+            self.magnets.append((centre, src.remanence / MU0 * volume * mag))
+        else:
+            raise ValueError(f"the oracle has no {src.kind} source")
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         points = np.atleast_2d(points)
-        d = points - self.centre
-        if self.near:  # magpylib's kernel (Derby & Olbert 2010) in the magnet's cylinder frame
-            z = d @ self.axis
-            radial = d - z[:, None] * self.axis
+        out = np.zeros_like(points, dtype=float) + self.uniform
+        if self.cylinder is not None:  # magpylib's kernel (Derby & Olbert 2010)
+            centre, axis, radius, half, remanence = self.cylinder
+            d = points - centre
+            z = d @ axis
+            radial = d - z[:, None] * axis
             rho = np.linalg.norm(radial, axis=1)
             b_rho, _, b_z = magpy.core.magnet_cylinder_axial_Bfield(
-                np.full(len(z), self.half / self.radius), rho / self.radius, z / self.radius
+                np.full(len(z), half / radius), rho / radius, z / radius
             )
             unit = radial / np.where(rho > 0, rho, 1.0)[:, None]
-            return self.remanence * (b_rho[:, None] * unit + b_z[:, None] * self.axis)
-        r = np.linalg.norm(d, axis=1)[:, None]
-        return MU0 / (4 * np.pi) * (3 * d * (d @ self.moment)[:, None] / r**5 - self.moment / r**3)
+            out = out + remanence * (b_rho[:, None] * unit + b_z[:, None] * axis)
+        for centre, moment in self.magnets:
+            d = points - centre
+            r = np.linalg.norm(d, axis=1)[:, None]
+            out = out + MU0 / (4 * np.pi) * (3 * d * (d @ moment)[:, None] / r**5 - moment / r**3)
+        for obj in self.objects:
+            out = out + obj.getB(points)
+        return out
 
     def with_gradient(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """B (k, 3) and dB/dp (k, 3, 3), [i, j] = dB_i / dp_j, by central differences."""
@@ -210,6 +264,8 @@ def ring_clearance(design: Design, tip: np.ndarray, tangent: np.ndarray) -> floa
     spacing along the tangent) to the external magnet's solid cylinder; negative inside
     it. [m]"""
     e, t = design.external_magnet, design.tip
+    if e is None:
+        return np.inf  # (the sources' magnets: the design file keeps them off the robot)
     axis = np.asarray(e.magnetization, float)
     axis = axis / np.linalg.norm(axis)
     reach = np.hypot(t.magnet_outer_diameter / 2, t.magnet_length / 2)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from design.equilibrium import solve_design
+from design.home import solve_home
 from design.model import RingPairModel
 
 
@@ -64,7 +65,8 @@ def test_steer_refuses_bad_targets_with_one_message(tmp_path, run, args, content
 def test_steer_path_writes_a_schedule_whose_angles_land_on_the_path(
     tmp_path, demonstrator, run, read_csv
 ):
-    """A circle about the demonstrator's axis (baseline model): every step reached, its
+    """A circle about the demonstrator's home (baseline model; the rings antiparallel, the
+    default centre since issue 49): every step reached, its
     angles solved forward land on the point, knob turns are the actuator's 30 knob turns
     per ring turn (single-start worm, 30-tooth wheel) from step 1, and the plot is
     written."""
@@ -79,7 +81,9 @@ def test_steer_path_writes_a_schedule_whose_angles_land_on_the_path(
     theta = np.deg2rad([[float(r["theta1_deg"]), float(r["theta2_deg"])] for r in rows])
     eq = solve_design(demonstrator, theta[:, 0], theta[:, 1], RingPairModel(frozenset()))
     phi = 2 * np.pi * np.arange(24) / 24
-    want = 10.0 * np.column_stack([np.cos(phi), np.sin(phi)])  # centred on the axis
+    model = RingPairModel(frozenset())
+    home = solve_home(model, model.parameters(demonstrator), demonstrator.robot.free_length)
+    want = home.position[1:] * 1e3 + 10.0 * np.column_stack([np.cos(phi), np.sin(phi)])
     np.testing.assert_allclose(eq.position[:, 1:] * 1e3, want, atol=1e-4)
     knobs = np.array([[float(r["knob1_turns"]), float(r["knob2_turns"])] for r in rows])
     np.testing.assert_allclose(knobs, 30 * (theta - theta[0]) / (2 * np.pi), atol=1e-6)

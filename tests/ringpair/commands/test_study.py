@@ -59,11 +59,13 @@ def test_every_stage_runs_and_the_report_shows_the_json_numbers(study_run):
     ]
     for number in numbers:
         assert number in page, number
-    # the controllable disc (steerable from rest without a snap) cannot exceed the loop's
-    # disc by more than the 10-degree grid's rasterisation
+    # the disc (steerable from home without a snap) under its old name too (issue 49)
     f = doc["forward"]
-    assert 0 < f["best_controllable_disc_radius_mm"] <= 1.05 * f["best_disc_radius_mm"]
-    assert doc["forward"]["best_disc_radius_mm"] > doc["forward"]["start_disc_radius_mm"]
+    assert f["best_controllable_disc_radius_mm"] == f["best_disc_radius_mm"]
+    # the study's NLP improves its own disc; this study designs with another model than the
+    # forward check's, about whose home its optimum need not be better (issue 49)
+    assert doc["best"]["disc_radius_mm"] > doc["start"]["disc_radius_mm"]
+    assert f["best_droop_mm"] >= 0 and f["start_droop_mm"] >= 0
     assert doc["tolerance"]["samples"] == 20 and doc["tolerance"]["disc_radius_std_mm"] > 0
     assert {r["effect"] for r in doc["effects"]} >= {"torsion", "near_field", "all"}
     images = re.findall(r'src="data:image/png;base64,', page)
@@ -356,11 +358,13 @@ def test_the_first_screen_carries_the_answer_in_headless_chromium(study_run, tmp
     _, out, _, _ = study_run
     doc = json.loads((out / "results.json").read_text())
     boxes = _first_screen(
-        browser, out / "report.html", tmp_path, ("#headline", "#forward", ".question", ".next")
+        browser, out / "report.html", tmp_path, ("#headline", "#study", ".question", ".next")
     )
+    # the headline is the disc (about home, steerable, the model for design work); this
+    # study designs with another model, whose own disc has its card
     headline = boxes["#headline"]
-    assert headline["text"].strip() == f"{doc['best']['disc_radius_mm']:.2f} mm"
-    assert boxes["#forward"]["text"].strip() == f"{doc['forward']['best_disc_radius_mm']:.2f} mm"
+    assert headline["text"].strip() == f"{doc['forward']['best_disc_radius_mm']:.2f} mm"
+    assert boxes["#study"]["text"].strip() == f"{doc['best']['disc_radius_mm']:.2f} mm"
     for selector, box in boxes.items():  # on the first screen, without scrolling
         assert 0 <= box["top"] < box["bottom"] <= 800, (selector, box)
         assert 0 <= box["left"] < box["right"] <= 1280, (selector, box)

@@ -51,116 +51,13 @@ import casadi as ca
 import numpy as np
 
 from design import cantilever, rod
-from design.cylinder_field import cylinder_field
-from design.dipole import dipole_field, dipole_field_gradient
-from design.geometry import magnet_spacing, ring_centres, ring_clearance
-from design.magnets import cylinder_moment, ring_moment, ring_volume
-from design.mounting import tip_geometry
+from design.model.effects import PRINTED_TIP, SWITCHES
+from design.model.field import CLASSIC, FieldLayout, field_model, layout_of, magnet_clearance
+from design.model.symbols import Symbols, ring_positions
 from design.records import Design
-from design.registry import NAMES, index, parameter_vector
-from design.sections import polar_moment_of_area, second_moment_of_area, shear_modulus
+from design.registry import NAMES, index, model_vector
 from design.stops import commanded_angles, resting_angles, stop_stiffness, stop_torque
 from design.wrench import tip_wrench
-
-EFFECTS = ("near_field", "large_deflection", "torsion", "gravity", "hysteresis")
-"""Model extensions by name (docs/formats.md): the causes a diagnosis can name."""
-PRINTED_TIP = "printed_tip"
-"""The tip as built (see the module's docstring): a switch of the model beside the effects,
-not among them, since it is known geometry of the design rather than a cause to find in
-data (diagnosis and the effects table leave it out)."""
-SWITCHES = (*EFFECTS, PRINTED_TIP)
-"""Everything a :class:`RingPairModel` can switch on."""
-
-
-DEFAULT_EFFECTS = frozenset({"near_field", "large_deflection", "gravity", PRINTED_TIP})
-"""The model for design work: the robot as it will be built (the printed tip's rigid segment
-and weight, :data:`PRINTED_TIP`; its pieces from the design file's ``[tip.mounting]`` or the
-resin defaults), the most faithful model that is well posed from a design file alone and
-stays fast (about 11,000 configurations per second on two cores). ``torsion`` is left out:
-with touching rings (kappa > 1) it makes the robot multistable, so the state depends on the
-path driven and on mechanical stops, not on the commanded angles alone; ``hysteresis`` needs
-friction angles, which come from bench data."""
-
-
-def available_effects() -> tuple[str, ...]:
-    """The effects this version implements (all of EFFECTS once each is wired in)."""
-    return EFFECTS
-
-
-def parse_effects(text: str) -> frozenset[str]:
-    """'none', 'default' (:data:`DEFAULT_EFFECTS`), 'all' (every effect and the printed
-    tip, :data:`SWITCHES`) or a comma list of their names (which may include 'default');
-    ValueError names the bad one."""
-    text = text.strip()
-    if text in ("", "none", "baseline"):
-        return frozenset()
-    if text == "default":
-        return DEFAULT_EFFECTS
-    if text == "all":
-        return frozenset(SWITCHES)
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    if "default" in names:  # 'default,torsion': the model for design work and more
-        names = [n for n in names if n != "default"] + sorted(DEFAULT_EFFECTS)
-    bad = [n for n in names if n not in SWITCHES]
-    if bad:
-        raise ValueError(
-            f"unknown model effect {bad[0]!r}; expected 'none', 'default', 'all' or a comma "
-            f"list of {', '.join(SWITCHES)}"
-        )
-    return frozenset(names)
-
-
-class Symbols(dict):
-    """Parameter symbols by name, with the derived quantities the model uses."""
-
-    def __init__(self, prm: ca.SX) -> None:
-        super().__init__(zip(NAMES, ca.vertsplit(prm), strict=True))
-        s = self
-        tubes = {}
-        for tube in ("catheter", "wire"):
-            od, idia = s[f"{tube}_outer_diameter"], s[f"{tube}_inner_diameter"]
-            e = s[f"{tube}_youngs_modulus"]
-            tubes[tube] = {
-                "EI": e * second_moment_of_area(od, idia),
-                "GJ": shear_modulus(e, s[f"{tube}_poisson_ratio"]) * polar_moment_of_area(od, idia),
-                "weight_per_length": s[f"{tube}_density"] * np.pi / 4 * (od**2 - idia**2),
-            }
-        self.bending_rigidity = s["bending_rigidity_scale"] * (
-            tubes["catheter"]["EI"] + tubes["wire"]["EI"]
-        )
-        # Ring 1 (distal, theta1) is turned by the wire, ring 2 (proximal) by the catheter.
-        self.torsional_rigidity = ca.vertcat(
-            s["wire_torsion_scale"] * tubes["wire"]["GJ"],
-            s["catheter_torsion_scale"] * tubes["catheter"]["GJ"],
-        )
-        self.rod_mass_per_length = (
-            tubes["catheter"]["weight_per_length"] + tubes["wire"]["weight_per_length"]
-        )
-        od, idia, h = s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
-        self.ring_moment = ring_moment(od, idia, h, s["magnet_remanence"])
-        self.ring_mass = s["magnet_density"] * ring_volume(od, idia, h)
-        self.magnet_spacing = magnet_spacing(h, s["magnet_gap"])
-        axis = ca.vertcat(*(s[f"external_magnetization_{a}"] for a in "xyz"))
-        self.external_magnetization = axis / ca.norm_2(axis)
-        self.external_center = ca.vertcat(
-            s["external_center_x"], s["external_center_y"], s["external_center_z"]
-        )
-        self.external_moment = self.external_magnetization * cylinder_moment(
-            s["external_diameter"], s["external_length"], s["external_remanence"]
-        )
-        self.gravity = ca.vertcat(s["gravity_x"], s["gravity_y"], s["gravity_z"])
-        self.applied_force = ca.vertcat(*(s[f"applied_force_{a}"] for a in "xyz"))
-        self.applied_moment = ca.vertcat(*(s[f"applied_moment_{a}"] for a in "xyz"))
-        self.tip = tip_geometry(
-            s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"],
-            s["magnet_gap"], s["catheter_outer_diameter"], s["wire_outer_diameter"],
-            s["catheter_inner_diameter"], s["mount_wall"], s["mount_fit_allowance"],
-            s["mount_running_clearance"], s["mount_density"], s["stop_angle"],
-        )  # fmt: skip
-        """The printed mounting pieces (:func:`design.mounting.tip_geometry`)."""
-        self.rod_length = s["free_length"]
-        """The flexible rod's length: the free length, less the rigid tip segment's offset
-        where the model has ``printed_tip`` (it sets this). [m]"""
 
 
 def _rotation_rates(quaternion: ca.SX) -> ca.SX:
@@ -168,6 +65,12 @@ def _rotation_rates(quaternion: ca.SX) -> ca.SX:
     changes by dQ = E(Q) dtheta / 2, and dtheta = 2 E(Q)^T dQ / |Q|^2. [-]"""
     w, v = quaternion[0], quaternion[1:4]
     return ca.vertcat(-v.T, w * ca.SX.eye(3) - ca.skew(v))
+
+
+def _dense_function(name: str, inputs: list, outputs: list, *rest) -> ca.Function:
+    """A Function whose outputs are dense (a field without gradient, a uniform one, makes
+    some structurally sparse; the solvers read outputs as dense columns)."""
+    return ca.Function(name, inputs, [ca.densify(o) for o in outputs], *rest)
 
 
 COARSE_STEPS = 5
@@ -184,26 +87,6 @@ def sylvester_minors(stiffness: ca.SX) -> ca.SX:
     scale = 1 / ca.sqrt(ca.fmax(ca.fabs(ca.diag(hs)), 1e-300))
     hn = hs * (scale @ scale.T)
     return ca.vertcat(*[ca.det(hn[:k, :k]) for k in range(1, n + 1)])
-
-
-def ring_positions(s: Symbols, position: ca.SX, frame: ca.SX) -> tuple[ca.SX, ca.SX]:
-    """(proximal, distal) ring centres of the robot whose rod tip is at ``position`` (3,)
-    with ``frame`` (3, 3), base frame (:func:`design.geometry.ring_centres`). [m]"""
-    return ring_centres(position, frame[:, 0], s.magnet_spacing)
-
-
-def magnet_clearance(s: Symbols, position: ca.SX, frame: ca.SX) -> ca.SX:
-    """Clearance of the tip rings to the external magnet
-    (:func:`design.geometry.ring_clearance`); negative where they touch. [m]"""
-    return ring_clearance(
-        ring_positions(s, position, frame),
-        s["magnet_outer_diameter"],
-        s["magnet_length"],
-        s.external_center,
-        s.external_magnetization,
-        s["external_diameter"],
-        s["external_length"],
-    )
 
 
 @dataclass(frozen=True)
@@ -265,6 +148,9 @@ class RingPairModel:
     """
 
     effects: frozenset[str] = frozenset()
+    layout: FieldLayout = CLASSIC
+    """The field's structure (:class:`design.model.field.FieldLayout`): the external
+    magnet alone by default; :meth:`for_design` gives the model of a design's field."""
     n_unknowns: int = field(init=False)
     n_rod: int = field(init=False)
     linear_rod: bool = field(init=False)
@@ -295,8 +181,8 @@ class RingPairModel:
 
         x = ca.SX.sym("x", n)
         command = ca.SX.sym("command", 2)
-        prm = ca.SX.sym("params", len(NAMES))
-        s = Symbols(prm)
+        prm = ca.SX.sym("params", len(NAMES) + self.layout.size)
+        s = Symbols(prm, self.layout)
         load = s["load_scale"]
         length, ei = s["free_length"], s.bending_rigidity
         printed = PRINTED_TIP in effects
@@ -428,8 +314,8 @@ class RingPairModel:
         opts = {"cse": True}
         arguments = [x, command, prm]
         functions = {
-            "residual": ca.Function("residual", arguments, [r, jac], io, ["r", "dr_dx"], opts),
-            "newton": ca.Function(
+            "residual": _dense_function("residual", arguments, [r, jac], io, ["r", "dr_dx"], opts),
+            "newton": _dense_function(
                 "newton",
                 arguments,
                 [r, newton_solve[:, 0], newton_solve[:, 1], monitor_solver, clearance],
@@ -437,10 +323,10 @@ class RingPairModel:
                 ["r", "step", "load_tangent", "monitor", "clearance"],
                 opts,
             ),
-            "relaxation": ca.Function(
+            "relaxation": _dense_function(
                 "relaxation", arguments, [relaxation], io, ["direction"], opts
             ),
-            "descent": ca.Function(
+            "descent": _dense_function(
                 "descent",
                 arguments,
                 [direction, ca.vec(fall_matrix), clearance],
@@ -448,7 +334,7 @@ class RingPairModel:
                 ["direction", "M", "clearance"],
                 opts,
             ),
-            "check": ca.Function(
+            "check": _dense_function(
                 "check",
                 arguments,
                 [r, monitor, position, frame, angles, clearance],
@@ -456,7 +342,7 @@ class RingPairModel:
                 ["r", "monitor", "position", "frame", "tip_angles", "clearance"],
                 opts,
             ),
-            "pose": ca.Function(
+            "pose": _dense_function(
                 "pose",
                 arguments,
                 [position, frame, angles],
@@ -464,7 +350,7 @@ class RingPairModel:
                 ["position", "frame", "tip_angles"],
                 opts,
             ),
-            "internal": ca.Function(
+            "internal": _dense_function(
                 "internal",
                 arguments,
                 [base_moment, end_moment, transmission_twist],
@@ -477,7 +363,7 @@ class RingPairModel:
         if stops:  # the unloaded robot against its stops
             rest = ca.vertcat(*resting_angles(command, s["stop_angle"], s["pretwist"], twist))
         x0 = ca.vertcat(ca.SX.zeros(n_rod), rest) if torsion else ca.SX.zeros(n_rod)
-        functions["initial"] = ca.Function(
+        functions["initial"] = _dense_function(
             "initial", [command, prm], [x0], ["command", "params"], ["x0"], opts
         )
         for name, fn in functions.items():
@@ -647,25 +533,10 @@ class RingPairModel:
         return r, jac, jac_solver, k_solver, dr_dload, focal, gradient_map, tip[0:3], frame
 
     def _field_model(self, s: Symbols):
-        """p (3) [m] -> (B [T], dB/dp [T/m]) of the external magnet: the exact cylinder with
-        ``near_field``, else its point dipole."""
-        near = "near_field" in self.effects
-
-        def field_model(p: ca.SX) -> tuple[ca.SX, ca.SX]:
-            offset = p - s.external_center
-            if near:
-                return cylinder_field(
-                    offset,
-                    s.external_magnetization,
-                    s["external_diameter"] / 2,
-                    s["external_length"],
-                    s["external_remanence"],
-                )
-            return dipole_field(offset, s.external_moment), dipole_field_gradient(
-                offset, s.external_moment
-            )
-
-        return field_model
+        """p (3) [m] -> (B [T], dB/dp [T/m]) of the model's field
+        (:func:`design.model.field.field_model`): permanent magnets exact with
+        ``near_field``, else their point dipoles."""
+        return field_model(s, "near_field" in self.effects)
 
     def unknown_scale(self, params: np.ndarray) -> np.ndarray:
         """Scale of each unknown for dimensionless norms: the free length for those in
@@ -702,7 +573,13 @@ class RingPairModel:
 
     def linear(self) -> RingPairModel:
         """The same model on the linear rod (``large_deflection`` switched off)."""
-        return model_for(self.effects - {"large_deflection"})
+        return model_for(self.effects - {"large_deflection"}, self.layout)
+
+    def for_design(self, design: Design) -> RingPairModel:
+        """The model with these effects for ``design``'s field (its layout): itself where
+        the layouts agree."""
+        layout = layout_of(design)
+        return self if layout == self.layout else model_for(self.effects, layout)
 
     @property
     def name(self) -> str:
@@ -711,12 +588,17 @@ class RingPairModel:
 
     @staticmethod
     def parameters(design: Design) -> np.ndarray:
-        """Parameter vector of ``design``, shape (n,). [SI]"""
-        return parameter_vector(design)
+        """Parameter vector of ``design``: :data:`design.registry.NAMES`, then its field
+        sources' (:func:`design.registry.model_vector`), shape (n,), for the model of its
+        field (:meth:`for_design`). [SI]"""
+        return model_vector(design)
 
 
 @cache
-def model_for(effects: frozenset[str] = frozenset()) -> RingPairModel:
-    """The model with ``effects``, built once per process (building its CasADi functions
-    takes 50-100 ms; models are equal and hash by their effects)."""
-    return RingPairModel(frozenset(effects))
+def model_for(
+    effects: frozenset[str] = frozenset(), layout: FieldLayout = CLASSIC
+) -> RingPairModel:
+    """The model with ``effects`` for the field ``layout``, built once per process
+    (building its CasADi functions takes 50-100 ms; models are equal and hash by their
+    effects and layout)."""
+    return RingPairModel(frozenset(effects), layout)

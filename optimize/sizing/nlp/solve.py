@@ -1,13 +1,5 @@
-"""Solving the design NLP of a study (:mod:`optimize.sizing.nlp_problem`) with IPOPT, with exact
-derivatives through the model's own CasADi expressions; evaluating designs; the results.
-
-Multi-start: start 1 is the base design, the others are drawn uniformly in the bounds
-(seeded); a start that fails is recorded with IPOPT's status and does not stop the study.
-If no start is feasible, a minimum-violation problem (one slack per constraint group)
-tells which constraints conflict and by how much.
-
-SI units are used for all inputs and outputs; file units only in reports.
-"""
+"""Solving the design NLP with IPOPT from several starts; the minimum-violation problem
+when none is feasible. SI units."""
 
 from __future__ import annotations
 
@@ -15,18 +7,26 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
-from typing import Any
 
 import numpy as np
 
-from design.controllable import controllable_disc_radius as controllable_disc
-from design.equilibrium import drive, solve_equilibria
 from design.geometry import ring_clears_wire
-from design.magnets import ring_volume
-from design.records import Design
 from design.registry import NAMES
 from optimize.sizing.materials import Material, material
+from optimize.sizing.nlp.branches import _loop_faults, _off_branch
+from optimize.sizing.nlp.evaluation import (
+    CONTROLLABLE,
+    _forward,
+    _metrics_dict,
+    _nlp_shape,
+    _Norms,
+    _norms,
+    _objective,
+    _states,
+    _violation,
+    controllable_disc_radius,
+    evaluate_design,
+)
 from optimize.sizing.nlp_designs import (
     candidate_design,
     free_values,
@@ -37,9 +37,6 @@ from optimize.sizing.nlp_designs import (
 from optimize.sizing.nlp_problem import (
     EQUILIBRIUM_TOLERANCE,
     GROUPS,
-    METRICS,
-    Core,
-    NlpShape,
     Problem,
     core,
     problem,
@@ -47,236 +44,10 @@ from optimize.sizing.nlp_problem import (
 )
 from optimize.sizing.nlp_results import (
     Conflict,
-    ConstraintState,
-    Evaluation,
     OptimizationResult,
     StartResult,
 )
-from optimize.sizing.studyfile import ParetoSweep, Study
-
-FEASIBILITY_TOLERANCE = 1e-6
-"""A constraint row counts as satisfied within this, in its group's file unit, plus this
-relative to its limit (IPOPT relaxes bounds by about 1e-8 relative)."""
-BRANCH_TOLERANCE = 1e-6
-"""An NLP equilibrium is the robot's state when its unknowns are within this of the state
-forward simulation reaches (dimensionless: unknowns over their scale, i.e. 1e-6 of the
-free length or 1e-6 rad; IPOPT's equilibria are exact to about 1e-8 of that scale)."""
-ARRIVAL_TOLERANCE = 1e-4
-"""A loop driven from one sample arrives at the next sample's state when the unknowns agree
-within this (as BRANCH_TOLERANCE; looser, since a snap moves them by far more and the
-driven states carry the path solver's tolerance besides IPOPT's)."""
-ACTIVE_TOLERANCE = 1e-5
-"""A constraint row is active when within this of its limit (file unit) or its multiplier
-is nonzero."""
-
-
-# ---------------------------------------------------------------------------- evaluation
-
-
-def _nlp_shape(study: Study) -> NlpShape:
-    return NlpShape(
-        frozenset(study.effects),
-        tuple(b.name for b in study.free),
-        study.configurations,
-        study.neutral_configurations,
-    )
-
-
-def _states(
-    c: Core,
-    g: np.ndarray,
-    bounds: Mapping[str, tuple[float, float]],
-    multipliers: np.ndarray | None = None,
-) -> tuple[ConstraintState, ...]:
-    rows = np.array(c.rows)
-    out = []
-    for name in dict.fromkeys(c.rows):
-        lo, hi = bounds[name]
-        if not (math.isfinite(lo) or math.isfinite(hi)):
-            continue
-        vals = g[rows == name]
-        scale, unit, _ = GROUPS[name]
-        margins = np.minimum(vals - lo, hi - vals)
-        i = int(np.argmin(margins))
-        limit = lo if vals[i] - lo <= hi - vals[i] else hi
-        mult = 0.0 if multipliers is None else float(np.max(np.abs(multipliers[rows == name])))
-        near = margins[i] / scale < ACTIVE_TOLERANCE or mult > 1e-7
-        active = bool(near and name in c.variable_groups)
-        out.append(
-            ConstraintState(
-                name, float(vals[i]), float(limit), float(margins[i]), active, mult, unit, scale
-            )
-        )
-    return tuple(out)
-
-
-def _violation(states: Sequence[ConstraintState]) -> float:
-    """Sum of the groups' violations in file units, each beyond FEASIBILITY_TOLERANCE
-    (absolute, plus the same relative to its limit)."""
-    return float(
-        sum(
-            max(0.0, -s.margin / s.scale - FEASIBILITY_TOLERANCE * abs(s.limit) / s.scale)
-            for s in states
-        )
-    )
-
-
-@dataclass(frozen=True)
-class _Norms:
-    """Base-design values the objectives are divided by, and scales. [SI]"""
-
-    disc: float
-    area: float
-    deflection: float
-    metrics: dict[str, float]
-
-
-def _metrics_dict(m: np.ndarray) -> dict[str, float]:
-    return {k: float(x) for k, x in zip(METRICS, np.asarray(m).ravel(), strict=True)}
-
-
-def _objective(study: Study, metrics: Mapping[str, float], norms: _Norms) -> float:
-    if len(study.objective) == 1:
-        name = study.objective[0][0]
-        # the NLP's own measure until the controllable disc is computed (optimize_design)
-        return float(metrics[name] if name in metrics else metrics["disc_radius"])
-    div = {"disc_radius": norms.disc, "area": norms.area, "reach_ratio": 1.0}
-    return float(sum(w * metrics[n] / div[n] for n, w in study.objective))
-
-
-def _off_branch(c: Core, prm: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Configurations where the NLP's equilibria x (n, K) are not the states the robot
-    reaches (:func:`design.solve_equilibria`: stable, connected to the unloaded robot), and
-    those states (n, K), NaN where there is none."""
-    eq = solve_equilibria(c.model, c.configuration_params(prm), c.commands[0], c.commands[1])
-    reached = eq.unknowns.T
-    scale = c.model.unknown_scale(prm)[:, None]
-    with np.errstate(invalid="ignore"):
-        differs = ~(np.max(np.abs(reached - x) / scale, axis=0) <= BRANCH_TOLERANCE)
-    return np.flatnonzero(differs), reached
-
-
-def _loop_faults(c: Core, prm: np.ndarray, x: np.ndarray) -> str:
-    """Why the robot could not be driven around the study's loops through its sampled
-    states x (n, K'; the states forward simulation reaches, which the NLP's equal), or ''
-    when it can: each loop (parallel rings, the workspace's rim;
-    antiparallel, the neutral loop; rings at right angles) is driven from every sample to
-    the next (:func:`design.equilibrium.drive`, sub-steps of 1 degree, failing where the
-    robot would snap) and must arrive at the next sample's state; and no sampled state
-    may share its command with another stable state (``multistable``)."""
-    k, kn = c.shape.configurations, c.shape.neutral_configurations
-    scale = c.model.unknown_scale(prm)[:, None]
-    loops = (("parallel", 0, k), ("antiparallel", k, kn), ("right-angle", k + kn, kn))
-    for name, first, count in loops:
-        idx = first + np.arange(count)
-        ahead = np.roll(idx, -1)
-        end = c.commands[:, idx] + 2 * np.pi / count  # the next sample, unwrapped
-        reached, ok = drive(c.model, prm, x[:, idx], c.commands[:, idx], end)
-        expected = x[:, ahead].copy()
-        if c.model.n_unknowns > c.model.n_rod:  # tip angles: a turn further at the wrap
-            expected[c.model.n_rod :] += end - c.commands[:, ahead]
-        with np.errstate(invalid="ignore"):
-            same = np.max(np.abs(reached - expected) / scale, axis=0) <= ARRIVAL_TOLERANCE
-        bad = np.flatnonzero(~(ok & same))
-        if bad.size:
-            where = ", ".join(f"{i}-{(i + 1) % count}" for i in bad[:4])
-            return f"the {name} loop snaps between samples {where} (of {count})"
-    sampled = c.commands[:, :-1]
-    eq = solve_equilibria(
-        c.model, c.configuration_params(prm)[:, :-1], sampled[0], sampled[1], multistable=True
-    )
-    if eq.multistable.any():
-        return f"multistable at configurations {np.flatnonzero(eq.multistable).tolist()[:6]}"
-    return ""
-
-
-CONTROLLABLE = "controllable_disc_radius"
-"""The objective option: the disc about the rest position the robot can be steered over
-from rest without a snap (:func:`controllable_disc_radius`)."""
-CONTROLLABLE_STEP = np.deg2rad(10.0)
-"""Grid step of the ring angles for the controllable workspace. [rad]"""
-
-
-def controllable_disc_radius(study: Study, design: Design) -> float:
-    """The radius of the disc about the rest position that the robot of ``design`` can be
-    steered over from rest without a snap (:func:`design.controllable.controllable_disc_radius`
-    on a CONTROLLABLE_STEP grid, the study's model). [m]"""
-    model = core(_nlp_shape(study)).model
-    p = study_parameters(study, design)
-    return controllable_disc(model, p, design.robot.free_length, CONTROLLABLE_STEP)
-
-
-def _forward(study: Study, design: Design) -> tuple[Core, np.ndarray, np.ndarray, Any]:
-    """Forward equilibria of ``design`` at the study's configurations: (core, v, X, eq)."""
-    c = core(_nlp_shape(study))
-    p = study_parameters(study, design)
-    eq = solve_equilibria(c.model, c.configuration_params(p), c.commands[0], c.commands[1])
-    return c, free_values(study, design), eq.unknowns.T.copy(), eq
-
-
-@lru_cache(maxsize=32)
-def _norms(study: Study) -> _Norms:
-    cat, wire = material_combinations(study)[0]
-    design = candidate_design(study, free_values(study, study.base), cat, wire)
-    c, v, x, _ = _forward(study, design)
-    x = np.nan_to_num(x)
-    _, m, _, _, _ = c.evaluate(v, x, study_parameters(study, design), 1.0)
-    metrics = _metrics_dict(m)
-    deflection = metrics["max_deflection"] if metrics["max_deflection"] > 0 else 1e-3
-    disc = metrics["disc_radius"] if metrics["disc_radius"] > 1e-6 * deflection else deflection
-    area = metrics["area"] if metrics["area"] > 0 else deflection**2
-    return _Norms(disc, area, deflection, metrics)
-
-
-def start_breaks(study: Study) -> list[str]:
-    """The limits the study's base design breaks, each described (file units); empty when
-    it is feasible. A start whose disc beats the optimum's is not one the study allows."""
-    ev = evaluate_design(study, study.base)
-    return [
-        s.describe()
-        for s in ev.constraints
-        if -s.margin / s.scale > FEASIBILITY_TOLERANCE * (1 + abs(s.limit) / s.scale)
-    ]
-
-
-def evaluate_design(
-    study: Study,
-    design: Design,
-    materials: tuple[str | None, str | None] | None = None,
-    epsilon: Mapping[str, float] | None = None,
-) -> Evaluation:
-    """Evaluate ``design`` by forward simulation (:func:`design.solve_equilibria`) on the
-    study's sampled configurations, with the same metric and constraint expressions as
-    the NLP. ``materials`` (catheter, wire) names pick the allowable strains (default:
-    the study's first candidates)."""
-    cat, wire = material_combinations(study)[0]
-    if materials is not None:
-        cat = material(materials[0]) if materials[0] else None
-        wire = material(materials[1]) if materials[1] else None
-    c, v, x, eq = _forward(study, design)
-    converged = bool(eq.converged.all())
-    norms = _norms(study)
-    p = study_parameters(study, design)
-    g, m, _, _, _ = c.evaluate(v, np.nan_to_num(x), p, norms.deflection)
-    g, metrics = np.asarray(g).ravel(), _metrics_dict(m)
-    if any(name == CONTROLLABLE for name, _ in study.objective):
-        metrics[CONTROLLABLE] = controllable_disc_radius(study, design)
-    bounds = group_bounds(study, cat, wire, epsilon)
-    states = _states(c, g, bounds)
-    violation = _violation(states)
-    if not converged:
-        violation = math.inf
-    return Evaluation(
-        _objective(study, metrics, norms),
-        metrics,
-        states,
-        converged,
-        bool(eq.stable.all()),
-        violation,
-    )
-
-
-# ------------------------------------------------------------------------------ solving
+from optimize.sizing.studyfile import Study
 
 
 def _start_points(study: Study, count: int) -> list[np.ndarray]:
@@ -663,43 +434,3 @@ def optimize_design(
         epsilon=dict(epsilon or {}),
         seconds=time.perf_counter() - t0,
     )
-
-
-def pareto_values(study: Study, sweep: ParetoSweep) -> np.ndarray:
-    """The epsilon bounds of one Pareto sweep, shape (points,), in increasing order. [SI]
-
-    Without an explicit range, the sweep spans the free bounds of its quantity (for the
-    magnet volume: the smallest and largest rings the ring bounds and the minimum wall
-    allow, base values for the fixed ones). ValueError if the quantity cannot change in this study.
-    """
-    low, high = sweep.low, sweep.high
-    if low is None or high is None:
-        if sweep.against == "magnet_volume":
-            tip = study.base.tip
-            fixed = {
-                "magnet_outer_diameter": tip.magnet_outer_diameter,
-                "magnet_inner_diameter": tip.magnet_inner_diameter,
-                "magnet_length": tip.magnet_length,
-            }
-            rng = {}
-            for name, value in fixed.items():
-                b = study.bound(name)
-                rng[name] = (b.low, b.high) if b else (value, value)
-            od, idia = rng["magnet_outer_diameter"], rng["magnet_inner_diameter"]
-            h = rng["magnet_length"]
-            bore = min(idia[1], od[0] - 2 * study.limits.min_wall)
-            lo_ = 2 * ring_volume(od[0], max(bore, 0.0), h[0])
-            hi_ = 2 * ring_volume(od[1], idia[0], h[1])
-        else:
-            b = study.bound(sweep.against)
-            if b is None:
-                raise ValueError(
-                    f"pareto sweep against {sweep.against} needs free.{sweep.against}_mm "
-                    "or an explicit range_mm"
-                )
-            lo_, hi_ = b.low, b.high
-        low = lo_ if low is None else low
-        high = hi_ if high is None else high
-    if not high > low:
-        raise ValueError(f"pareto sweep against {sweep.against} has an empty range")
-    return np.linspace(low, high, sweep.points)
