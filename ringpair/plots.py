@@ -377,7 +377,12 @@ def plot_fronts(pareto: ParetoResult, best: OptimizationResult, study: Study, pa
         ax.set_xlabel(label)
         ax.set_ylabel("disc radius [mm]" if len(study.objective) == 1 else "objective")
         ax.ticklabel_format(axis="y", useOffset=False)
-        ax.set_ylim(bottom=0, top=1.1 * np.nanmax(np.r_[obj, best_objective]))
+        finite = np.r_[obj, best_objective]
+        finite = finite[np.isfinite(finite)]
+        if finite.size:
+            ax.set_ylim(bottom=0, top=1.1 * finite.max())
+        else:  # every point of this sweep infeasible: an empty panel that says so
+            ax.text(0.5, 0.5, "no feasible point", transform=ax.transAxes, ha="center")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(f"Pareto fronts of '{study.name}'")

@@ -99,7 +99,7 @@ def simulate(
     rod's axis, along which the model's tip does not give, is left out).
     """
     d = design_from(design)
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     if ordered and d.environment.obstacles:
         raise UserError(
             "--ordered: a driven path in contact with environment.obstacles is not followed "

@@ -224,7 +224,7 @@ def steer_command(
     z_mm (the driven tip), error_mm, reached, snapped (the move into this point snapped).
     """
     d = design_from(design)
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     if path_spec is not None:
         if to or targets is not None:
             raise UserError("--path drives along a path; give it without --to or --targets")

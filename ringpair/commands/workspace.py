@@ -85,7 +85,7 @@ def workspace(
             "workspace: the full-turn map with environment.obstacles is not made yet; "
             "`ringpair simulate` solves configurations pressed on them"
         )
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     check_configurations(len(angle_grid(np.deg2rad(step))) ** 2, max_configs, "--step")
     out = output_path(
         out or default_out(d.name, "workspace"),
