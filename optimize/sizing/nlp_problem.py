@@ -220,6 +220,7 @@ class Core:
     compiled: ca.Function  # the same in native code, with its Jacobian (first derivatives)
     evaluate: ca.Function  # (v, X, P, scale) -> g, metrics, side distances, widths, area
     exact: ca.Function  # the same from ``column``, twice differentiable (exact Hessians)
+    outcome: ca.Function  # (prm, mapped rows, mapped deflections, scale) -> evaluate's outputs
     rows: tuple[str, ...]
     variable_groups: frozenset[str]
     """Groups that depend on the free quantities (the others cannot be active)."""
@@ -376,9 +377,13 @@ def core(shape: NlpShape) -> Core:
     compiled = compile_functions([column, column.jacobian()])[0]
     design = _design_rows()
     rows = column_rows(model)
-    evaluate, groups, free_groups = _evaluation(shape, cmd, params, compiled, design, rows)
-    exact = _evaluation(shape, cmd, params, column, design, rows)[0]
-    return Core(shape, model, cmd, params, column, compiled, evaluate, exact, groups, free_groups)
+    outcome = _outcome(shape, cmd.shape[1], len(rows), design, rows)
+    evaluate, free_groups = _evaluation(shape, cmd, params, compiled, outcome)
+    exact = _evaluation(shape, cmd, params, column, outcome)[0]
+    return Core(
+        shape, model, cmd, params, column, compiled, evaluate, exact, outcome[0], outcome[1],
+        free_groups,
+    )  # fmt: skip
 
 
 def _configuration_params(prm: ca.MX, count: int) -> ca.MX:
@@ -394,22 +399,52 @@ def _evaluation(
     cmd: np.ndarray,
     params: ca.Function,
     column: ca.Function,
-    design: tuple[tuple[str, ...], ca.Function],
-    column_groups: tuple[str, ...],
-) -> tuple[ca.Function, tuple[str, ...], frozenset[str]]:
-    """The study's rows and metrics from ``column`` mapped over the configurations (whose
-    rows are of ``column_groups``):
-    (v, X, P, scale) -> (g, metrics, side distances, widths, signed area); the group of
-    every row of g; the groups that depend on the free quantities or the unknowns."""
+    outcome: tuple[ca.Function, tuple[str, ...]],
+) -> tuple[ca.Function, frozenset[str]]:
+    """The study's rows and metrics from ``column`` mapped over the configurations:
+    (v, X, P, scale) -> (g, metrics, side distances, widths, signed area), ``outcome``
+    (:func:`_outcome`) of the mapped rows and deflections; the groups that depend on the
+    free quantities or the unknowns."""
     n, nf, k_all = column.size1_in(0), len(shape.free), cmd.shape[1]
-    k_par, kn = shape.configurations, shape.neutral_configurations
-    design_groups, design_rows = design
     v = ca.MX.sym("v", nf)
     big_x = ca.MX.sym("X", n, k_all)
     base = ca.MX.sym("P", len(NAMES))
     scale = ca.MX.sym("scale")
     prm = params(v, base)
     _, rows_k, deflection = column.map(k_all)(big_x, ca.DM(cmd), _configuration_params(prm, k_all))
+    outputs: list[ca.MX] = list(outcome[0](prm, rows_k, deflection, scale))
+    evaluate = ca.Function(
+        "study_metrics",
+        [v, big_x, base, scale],
+        outputs,
+        ["v", "X", "P", "scale"],
+        ["g", "metrics", "side_distances", "widths", "area_signed"],
+    )
+    g, unknowns = outputs[0], ca.vertcat(v, ca.vec(big_x))
+    free_groups = frozenset(
+        grp for grp, k in zip(outcome[1], range(g.numel()), strict=True)
+        if ca.depends_on(g[k], unknowns)
+    )  # fmt: skip
+    return evaluate, free_groups
+
+
+def _outcome(
+    shape: NlpShape,
+    k_all: int,
+    n_rows: int,
+    design: tuple[tuple[str, ...], ca.Function],
+    column_groups: tuple[str, ...],
+) -> tuple[ca.Function, tuple[str, ...]]:
+    """The study's rows and metrics from the mapped column's rows and deflections (whose
+    rows are of ``column_groups``), without the model (cheap to differentiate):
+    (prm, rows (n_rows, K'), deflection (3, K'), scale) -> (g, metrics, side distances,
+    widths, signed area); the group of every row of g."""
+    k_par, kn = shape.configurations, shape.neutral_configurations
+    design_groups, design_rows = design
+    prm = ca.SX.sym("params", len(NAMES))
+    rows_k = ca.SX.sym("rows", n_rows, k_all)
+    deflection = ca.SX.sym("deflection", 3, k_all)
+    scale = ca.SX.sym("scale")
     rest = deflection[:, -1]  # the robot at rest, field off
     neutral = deflection[:, k_par : k_par + kn] - ca.repmat(rest, 1, kn)
     neutral_distance = ca.sqrt(ca.sum1(neutral * neutral) + TINY**2).T
@@ -446,19 +481,14 @@ def _evaluation(
         _smooth_max(d[0, :].T, scale) + _smooth_max(-d[0, :].T, scale),
         _smooth_max(d[1, :].T, scale) + _smooth_max(-d[1, :].T, scale),
     )
-    evaluate = ca.Function(
-        "study_metrics",
-        [v, big_x, base, scale],
+    outcome = ca.Function(
+        "study_outcome",
+        [prm, rows_k, deflection, scale],
         [g, metrics, sides, widths, area_signed],
-        ["v", "X", "P", "scale"],
+        ["params", "rows", "deflection", "scale"],
         ["g", "metrics", "side_distances", "widths", "area_signed"],
     )
-    unknowns = ca.vertcat(v, ca.vec(big_x))
-    free_groups = frozenset(
-        grp for grp, k in zip(groups, range(g.numel()), strict=True)
-        if ca.depends_on(g[k], unknowns)
-    )  # fmt: skip
-    return evaluate, groups, free_groups
+    return outcome, groups
 
 
 @dataclass(frozen=True)
@@ -523,10 +553,11 @@ def _symbolic_nlp(
     big_x = xt * ca.repmat(xs, 1, k_all)
     prm = c.params(v, p_base)
     column = c.column if exact else c.compiled
-    evaluate = c.exact if exact else c.evaluate
-    g_rows, _, sides, widths, area_signed = evaluate(v, big_x, p_base, scale)
+    # the model mapped once: its derivatives are most of an iteration's work
+    mapped = column.map(k_all)(big_x, ca.DM(c.commands), _configuration_params(prm, k_all))
+    r_all, rows_k, deflection = mapped
+    g_rows, _, sides, widths, area_signed = c.outcome(prm, rows_k, deflection, scale)
     rho = rho_t * norms[0]
-    r_all = column.map(k_all)(big_x, ca.DM(c.commands), _configuration_params(prm, k_all))[0]
     equilibrium = [ca.vec(r_all / ca.repmat(xs, 1, k_all))]
     groups = list(c.rows) + ["min_disc_radius", "min_reach_ratio"]
     row_scale = np.array([GROUPS[g][0] for g in groups])
