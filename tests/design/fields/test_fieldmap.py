@@ -66,8 +66,14 @@ def test_map_of_a_coil_converges_at_the_splines_order_in_the_grid_spacing():
         )  # fmt: skip
     errors = np.array(errors)
     order = np.log2(errors[:-1] / errors[1:])
+    overall = np.log2(errors[0] / errors[-1]) / 2
     print("relative errors (B, G) at h = 3.75, 1.875, 0.94 mm:", errors, "orders", order)
-    assert (order[:, 0] > 3.2).all() and (order[:, 1] > 2.8).all()  # measured 3.4-4.5, 3.4-4.0
+    # cubic splines: B converges as h^4, its gradient as h^3. The largest error over random
+    # points makes one halving's order noisy (16 seeds: B 3.3-5.1, G 2.7-4.0), the order
+    # over both halvings less so (B 3.7-4.7, G 3.1-3.9): every halving at least h^2, both
+    # together near the theory
+    assert (order > 2).all()
+    assert overall[0] > 3.5 and overall[1] > 2.8
     # at h = a / 53 (0.94 mm for a 50 mm coil): B to 2e-6, G to 2e-4 of their largest
     # value (measured 6e-7 and 7e-5)
     assert errors[-1, 0] < 2e-6 and errors[-1, 1] < 2e-4

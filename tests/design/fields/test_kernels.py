@@ -51,7 +51,12 @@ def test_flux_density_and_gradient_match_magpylib_over_drawn_sources(kind):
         )
         expected = richardson_gradient(source.getB, points, steps)
         g_error = relative(grad, expected, (1, 2))
-        assert g_error.max() < 1e-8, (q, points[g_error.argmax()])
+        # the reference's own error, from a second step size: near a body magpylib's
+        # rounding through the differences reaches ~1e-8 (seed 8, a cylinder 0.9 mm off)
+        again = richardson_gradient(source.getB, points, 1.5 * steps)
+        reference = relative(again, expected, (1, 2))
+        excess = g_error - 1e-8 - 2 * reference
+        assert excess.max() < 0, (q, points[excess.argmax()], g_error.max(), reference.max())
         # a vacuum field: G symmetric (curl B = 0) and traceless (div B = 0)
         scale = np.linalg.norm(grad, axis=(1, 2))
         assert (np.abs(np.trace(grad, axis1=1, axis2=2)) / scale).max() < 1e-9
