@@ -183,6 +183,17 @@ class FloatRange(click.FloatRange):
         return number
 
 
+def grid_step_option(default: float) -> Callable[[F], F]:
+    """--step: the grid step of both ring angles over a full turn [deg]."""
+    return click.option(
+        "--step",
+        type=FloatRange(0.1, 90.0),
+        default=default,
+        show_default=True,
+        help="Grid step of theta1 and theta2 over a full turn [deg].",
+    )
+
+
 FORCE = click.option(
     "--force", is_flag=True, help="Replace an existing file that may be someone's input."
 )

@@ -16,13 +16,13 @@ from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
     OVERWRITE_POLICY,
-    FloatRange,
     UserError,
     check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
+    grid_step_option,
     json_text,
     model_from,
     output_path,
@@ -43,13 +43,7 @@ FILES = ("force.csv", "summary.json", "force.png")
     help="Directory for force.csv, summary.json and force.png. "
     "Default: outputs/<design name>/force. " + OVERWRITE_POLICY,
 )
-@click.option(
-    "--step",
-    type=FloatRange(0.1, 90.0),
-    default=10.0,
-    show_default=True,
-    help="Grid step of both ring angles over a full turn [deg].",
-)
+@grid_step_option(10.0)
 @effects_option("default")
 @MAX_CONFIGS
 def force(

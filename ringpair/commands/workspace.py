@@ -19,13 +19,13 @@ from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
     OVERWRITE_POLICY,
-    FloatRange,
     UserError,
     check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
+    grid_step_option,
     json_text,
     model_from,
     output_path,
@@ -53,13 +53,7 @@ FILES = (
     help="Directory for workspace.csv, summary.json and the PNG plots. "
     "Default: outputs/<design name>/workspace. " + OVERWRITE_POLICY,
 )
-@click.option(
-    "--step",
-    type=FloatRange(0.1, 90.0),
-    default=5.0,
-    show_default=True,
-    help="Grid spacing of theta1 and theta2 over a full turn [deg].",
-)
+@grid_step_option(5.0)
 @effects_option("default")
 @MAX_CONFIGS
 def workspace(
