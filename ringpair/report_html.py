@@ -560,7 +560,7 @@ table{border-collapse:collapse;margin:0.4em 0;font-size:13px}
 td,th{border:1px solid #bbb;padding:2px 7px}th{background:#eee}tr.mark td{background:#fff3c4}
 img{max-width:100%;margin:4px 0}.row{display:flex;gap:8px;align-items:flex-start}
 .row img{max-width:49%;height:auto}.cards{display:flex;gap:10px;margin:0.5em 0}
-.card{border:1px solid #bbb;border-radius:6px;padding:6px 10px;flex:1;font-size:14px}
+.card{border:1px solid #bbb;border-radius:6px;padding:6px 10px;flex:1;font-size:13px}
 .card.main{border:2px solid #1f77b4;background:#eef5fb}
 .big{font-size:2.1em;font-weight:bold;color:#1f77b4}.question{margin:0.3em 0}
 .next{background:#eef8ee;padding:4px 8px;border-left:4px solid #2ca02c}

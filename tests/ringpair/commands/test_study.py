@@ -147,9 +147,10 @@ def test_report_renders_and_prints_in_headless_chromium(study_run, tmp_path):
     assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 3
     manifest = json.loads((out / "manifest.json").read_text())
     assert "report.pdf" in {f["path"] for f in manifest["files"]}
-    img = _screenshot(browser, out / "report.html", tmp_path / "report.png", "1200,2600")
+    # 4000 px: the first figures sit below the cards, limits and design tables (~2700 px)
+    img = _screenshot(browser, out / "report.html", tmp_path / "report.png", "1200,4000")
     img = img.astype(float)
-    assert img.shape[:2] == (2600, 1200)
+    assert img.shape[:2] == (4000, 1200)
     # Text and embedded figures drew: dark pixels and coloured (plot) pixels both present.
     assert (img.mean(axis=2) < 100).mean() > 0.002
     assert (np.ptp(img, axis=2) > 60).mean() > 0.002
