@@ -83,7 +83,12 @@ def _fall(
             kick = settings.KICK * np.sign(lead) / np.where(big > 0, big, 1.0)
             xs[:, a[fresh]] += sign[a[fresh]] * kick * soft.T
             kicked[a[fresh]] = True
-        components = np.linalg.solve(vectors, direction.T[:, :, None].astype(complex))[:, :, 0]
+        pulls = direction.T[:, :, None].astype(complex)
+        try:
+            components = np.linalg.solve(vectors, pulls)[:, :, 0]
+        except np.linalg.LinAlgError:  # a repeated eigenvalue's eigenvectors can be
+            # dependent (drawn source set, seed 2488198026): the least-squares components
+            components = (np.linalg.pinv(vectors) @ pulls)[:, :, 0]
         magnitude = np.maximum(np.abs(values.real), settings.MODE_FLOOR)
         step = np.einsum("kij,kj->ki", vectors, components / magnitude).real.T
         size = _norm(step, scale[:, a])

@@ -135,7 +135,10 @@ def test_drawn_source_sets_agree_with_an_independent_solve_on_magpylib(effects):
     print(f"seed {SEED}")
     rng = np.random.default_rng([SEED, len(effects)])
     checked = 0
-    for _ in range(3 if "large_deflection" not in effects else 1):
+    designs = 3 if "large_deflection" not in effects else 1
+    for drawn in range(designs + 4):
+        if drawn >= designs and checked:
+            break  # (more robots are drawn only while no stable state has been compared)
         base = random_design(rng)
         design = in_field(base, *draw_sources(base, rng), external=True)
         commands = rng.uniform(-np.pi, np.pi, (2, 2))
