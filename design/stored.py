@@ -31,7 +31,9 @@ import io
 import json
 import math
 import os
+import warnings
 import zipfile
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path, PurePath
 from typing import Any
@@ -162,6 +164,29 @@ def save(path: str | os.PathLike[str], value: Any, key: str) -> None:
     np.savez(buffer, **arrays)
     with atomic_path(path) as tmp:
         tmp.write_bytes(buffer.getvalue())
+
+
+def reuse(
+    path: Path,
+    key: str,
+    packages: tuple[str, ...],
+    valid: Callable[[Any], bool],
+    kind: str,
+    again: str,
+) -> Any:
+    """The value stored at ``path`` for ``key`` if it is ``kind`` (``valid``); None when no
+    file is there, or with a warning ending in ``again`` when the file is foreign,
+    truncated, altered or not ``kind``."""
+    if not path.exists():
+        return None
+    try:
+        value = load(path, key, packages)
+        if not valid(value):
+            raise StoredError(f"not {kind}")
+    except StoredError as exc:
+        warnings.warn(f"{path}: not reused ({exc}); {again}", StoredWarning, stacklevel=3)
+        return None
+    return value
 
 
 def load(path: str | os.PathLike[str], key: str, packages: tuple[str, ...]) -> Any:

@@ -25,7 +25,6 @@ import hashlib
 import json
 import os
 import time
-import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -181,24 +180,15 @@ def stored_stage(out: Path, name: str, key: str) -> tuple[Any, float] | None:
     foreign, truncated or altered (then with a warning, and the stage runs again)."""
     from optimize.sizing.pareto import PACKAGES
 
-    path = stage_path(out, name, key)
-    if not path.exists():
-        return None
-    try:
-        value = stored.load(path, key, PACKAGES)
-    except stored.StoredError as exc:
-        warnings.warn(
-            f"{path}: not reused ({exc}); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    if not (isinstance(value, dict) and set(value) == {"result", "seconds"}):
-        warnings.warn(
-            f"{path}: not reused (not a stage result); stage '{name}' runs again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
+    value = stored.reuse(
+        stage_path(out, name, key),
+        key,
+        PACKAGES,
+        lambda v: isinstance(v, dict) and set(v) == {"result", "seconds"},
+        "a stage result",
+        f"stage '{name}' runs again",
+    )
+    if value is None:
         return None
     return value["result"], float(value["seconds"])
 

@@ -19,7 +19,6 @@ from __future__ import annotations
 import logging
 import os
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,24 +104,14 @@ def _store(path: Path, point: ParetoPoint, key: str) -> None:
 def _load(path: Path, key: str) -> ParetoPoint | None:
     """The point stored at ``path`` for ``key``; None (with a warning when a file is there
     but foreign, truncated or altered: the point is then solved again)."""
-    if not path.exists():
-        return None
-    try:
-        point = stored.load(path, key, PACKAGES)
-    except stored.StoredError as exc:
-        warnings.warn(
-            f"{path}: not reused ({exc}); the point is solved again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
-    if not isinstance(point, ParetoPoint):
-        warnings.warn(
-            f"{path}: not reused (not a Pareto point); the point is solved again",
-            stored.StoredWarning,
-            stacklevel=2,
-        )
-        return None
+    point: ParetoPoint | None = stored.reuse(
+        path,
+        key,
+        PACKAGES,
+        lambda v: isinstance(v, ParetoPoint),
+        "a Pareto point",
+        "the point is solved again",
+    )
     return point
 
 
