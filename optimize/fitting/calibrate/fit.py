@@ -6,6 +6,7 @@ answer checked with the load ramp (module docstring of
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Literal
@@ -18,6 +19,7 @@ from design.records import Design
 from design.registry import index
 from design.units import MM
 from optimize.fitting.calibrate.policy import FREE_PARAMETERS, _check_free, default_free
+from optimize.fitting.calibrate.priors import Priors, prior_widths
 from optimize.fitting.calibrate.problem import _Problem
 from optimize.fitting.calibrate.result import DEFAULT_SIGMA, CalibrationResult, row_sigma
 from optimize.fitting.measurements import Measurements
@@ -26,6 +28,10 @@ from optimize.fitting.sensitivity import position_errors
 WARM_RETRIES = 1
 """Fits made again from the start with warm starts, the rows whose warm start went
 elsewhere by the ramp, before one with every row by the ramp."""
+NOISE_AGREES = 1.25
+"""With priors and no stated noise, a fit is made again with the noise its residuals
+imply unless that lies within this factor of the one assumed (the priors' weight then
+within 1.6x of the data's). [-]"""
 WARM_TOLERANCE = 1e-3
 """The warm-started states of a fit's answer are the ramp's where every fitted row's tip
 lies within this fraction of its sigma of the ramp's (else the fit goes on with the
@@ -56,7 +62,7 @@ def calibrate(
     rows: np.ndarray | Sequence[int] | None = None,
     fixed: Mapping[str, float] | None = None,
     initial: Mapping[str, float] | None = None,
-    priors: bool = False,
+    priors: bool | Priors = False,
     sigma: float | None = None,
     ordered: bool | Literal["driven"] | None = None,
     tip_angles: bool = True,
@@ -65,6 +71,7 @@ def calibrate(
     anchor: Mapping[str, tuple[float, float]] | None = None,
     warm_start: bool = True,
     states: np.ndarray | None = None,
+    within: float | None = None,
 ) -> CalibrationResult:
     """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
 
@@ -74,8 +81,10 @@ def calibrate(
     fixed : values of other model parameters (names of ``design.registry.NAMES``) that
         differ from the design, e.g. an earlier fit's. [SI]
     initial : starting values of free parameters; default the nominal design's. [SI]
-    priors : add a Gaussian penalty row per free parameter, centred on the nominal design,
-        with the width of :data:`FREE_PARAMETERS`.
+    priors : maximise the posterior: a Gaussian residual per free parameter, centred on
+        the nominal design (:mod:`optimize.fitting.calibrate.priors`): True with the
+        default widths, a mapping with those widths overridden (fit units, as
+        :func:`optimize.fitting.calibrate.priors.parse_priors` gives them).
     sigma : one-sigma position uncertainty for rows whose data give none. [m]
     ordered : see :func:`predict`.
     tip_angles : also fit measured tip angles (sigma TIP_ANGLE_SIGMA) where present.
@@ -88,6 +97,9 @@ def calibrate(
     states : shape (N, n_unknowns), each row's state at parameters near the start (e.g.
         the fit of all the data, for a fold of a cross-validation that starts there; NaN:
         none): the first evaluation is warm-started from them too.
+    within : with priors, bound each free parameter to its nominal value +- this many
+        prior sigmas (the prior-bounded fit: what the model can do with physical
+        parameters only, e.g. PULL_LIMIT). [-]
     min_solved : the fraction of fitted rows that must have an equilibrium at the start;
         below it :class:`UnsolvedStart` is raised before any fitting (a least-squares fit
         from a start where most rows have no state rarely finds one). [-]
@@ -109,10 +121,16 @@ def calibrate(
         start[name] = float(value)
     fit_rows = np.arange(len(m)) if rows is None else np.arange(len(m))[np.asarray(rows)]
     s_rows = row_sigma(m, sigma)
+    if priors is False:
+        widths = np.full(len(names), np.inf)
+    else:
+        table = prior_widths(priors if isinstance(priors, Mapping) else None)
+        widths = np.array([table[n] for n in names])
     prob = _Problem(
-        model, base, names, m, fit_rows, s_rows, ordered, priors, tip_angles, np.zeros(len(names))
+        model, base, names, m, fit_rows, s_rows, ordered, widths, tip_angles, np.zeros(len(names))
     )
     prob.warm = warm_start
+    prob.within = within if within is not None and np.isfinite(widths).any() else None
     if states is not None:
         if states.shape != (len(m), model.n_unknowns):
             raise ValueError(
@@ -157,7 +175,7 @@ def calibrate(
     # With priors, the weight of the data against them needs the noise: when the data do
     # not give it, estimate it from a first fit's residuals and fit again.
     noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
-    passes = 2 if priors and not noise_known else 1
+    passes = 2 if np.isfinite(widths).any() and not noise_known else 1
     u_start = u0.copy()
 
     def solve(u_from: np.ndarray) -> OptimizeResult:
@@ -176,7 +194,10 @@ def calibrate(
         u0 = sol.x
         if attempt + 1 < passes:
             r = prob.residuals(sol.x)[: prob.n_data()]
-            prob.sigma = prob.sigma * np.sqrt(float(r @ r) / dof)
+            scale = math.sqrt(float(r @ r) / dof)
+            if 1 / NOISE_AGREES < scale < NOISE_AGREES:
+                break  # the assumed noise was the data's: the weights stand
+            prob.sigma = prob.sigma * scale
             prob.invalidate()
     u = sol.x
     tolerance = WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))
@@ -289,7 +310,10 @@ def calibrate(
         evaluations=prob.evaluations,
         time_s=time.perf_counter() - t0,
         message=message,
-        priors=priors,
+        priors=bool(np.isfinite(widths).any()),
+        prior_width=dict(zip(names, map(float, widths), strict=True)),
+        within=prob.within,
+        prior_chi2=float(np.sum(np.where(np.isfinite(widths), u / widths, 0.0) ** 2)),
         states=np.where(pred.equilibria.converged[:, None], pred.equilibria.unknowns, np.nan),
         jacobian=jac[: prob.n_data()],
         jacobian_rows=np.concatenate([np.nonzero(prob.pos_mask)[0], np.nonzero(prob.ang_mask)[0]]),

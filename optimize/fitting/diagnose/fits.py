@@ -16,6 +16,7 @@ from design.model import model_for
 from design.records import Design
 from optimize.fitting.calibrate import (
     CalibrationResult,
+    Priors,
     UnsolvedStart,
     calibrate,
     cross_validate,
@@ -60,6 +61,8 @@ def _fit(
     sigma: float | None,
     max_nfev: int | None = None,
     free: Sequence[str] = (),
+    priors: bool | Priors = True,
+    within: float | None = None,
 ) -> Fit:
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
     estimates, and its states if it is of this model; a mapping: these values, the others
@@ -70,7 +73,9 @@ def _fit(
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
-    options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev}
+    options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev, "priors": priors}
+    if within is not None:  # the prior-bounded fit (calibrate's ``within``)
+        options["within"] = within
     if max_nfev is not None:  # a screen: skip starts where most rows have no state
         options["min_solved"] = MIN_SOLVED
 
@@ -118,7 +123,7 @@ def _fit(
     # A fit that solves every row first; among fits that all leave rows, the least misfit.
     cal, path = min(fits, key=lambda f: (f[0].unconverged > 0, f[0].chi2))
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
-        start = _prefix_start(design, m, effects, free, cal, sigma)
+        start = _prefix_start(design, m, effects, free, cal, sigma, priors)
         if start is not None:
             early, _ = fit(start, "driven")
             if early.unconverged == 0 and early.chi2 < cal.chi2:
@@ -163,6 +168,7 @@ def _cross_validated(
         for n in cal.names
         if np.isfinite(error[n]) and error[n] > 0
     }
+    priors = {n: w for n, w in cal.prior_width.items()} if cal.priors else False
     held_out = cross_validate(
         design,
         m,
@@ -176,5 +182,7 @@ def _cross_validated(
         max_nfev=FOLD_EVALUATIONS,
         ordered=fit.ordered,
         anchor=anchor,
+        priors=priors,
+        within=cal.within,
     )
     return replace(fit, cv_rmse_mm=held_out.rmse_mm, cv_expected_ratio=held_out.expected_ratio)

@@ -106,8 +106,8 @@ def test_calibrate_profile_gives_intervals_around_the_estimates(tmp_path):
     for name, (lower, upper) in doc["profile_interval"].items():
         assert lower <= doc["estimate"][name] <= upper, name
     assert set(doc["profile_interval"]) == set(doc["estimate"])
-    both = run("calibrate", str(out), "--profile", "--priors")
-    assert both.exit_code == 2 and "--profile is for fits without --priors" in both.output
+    both = run("calibrate", str(out), "--priors", "--no-priors")
+    assert both.exit_code == 2 and "contradict" in both.output
 
 
 def test_calibrate_fits_torsion_from_stiff_and_soft_transmissions_too(tmp_path):
