@@ -28,6 +28,7 @@ from optimize.fitting.calibrate import (
     parse_prior_options,
     prior_widths,
 )
+from optimize.fitting.diagnose import diagnose
 from optimize.fitting.planted import as_built
 from optimize.fitting.setups import random_design
 from optimize.fitting.synth import synthesize_data
@@ -137,3 +138,37 @@ def test_a_baseline_that_absorbs_an_effect_by_moving_the_magnet_says_it_is_not_p
     assert all(abs(p) <= PULL_LIMIT + 1e-9 for p in bounded.pulls().values())
     noise_rms = 0.3 * math.sqrt(2)
     assert bounded.rmse_mm > 2 * noise_rms > plain.rmse_mm / 2
+
+
+@pytest.mark.slow
+def test_a_magnet_20_mm_off_makes_the_diagnosis_say_the_prior_is_violated_not_an_effect():
+    """The paper's set-up seen from above, nothing planted but the magnet 20 mm off its
+    nominal place along y (4 prior sigmas): no effect is named; the diagnosis says the
+    baseline needs the magnet there, a violated prior, and its JSON says which."""
+    y = DEMO.external_magnet.center[1] + 20 * MM
+    m = _top_sweep((), {"external_center_y": y})
+    result = diagnose(DEMO, m, candidates=("torsion", "gravity"))
+    doc = result.to_json()
+    assert result.causes == ()
+    assert "prior is violated" in result.unexplained
+    assert "external_center_y_mm" in result.unexplained
+    assert doc["baseline"]["physical"] is False
+    assert set(doc["baseline"]["beyond_prior"]) == {"external_center_y_mm"}
+    assert doc["baseline"]["pull"]["external_center_y_mm"] > PULL_LIMIT
+    assert doc["baseline"]["prior"]["external_center_y_mm"]["sigma"] == pytest.approx(5.0)
+    assert doc["baseline_within_priors"]["physical"] is True
+
+
+@pytest.mark.slow
+def test_gravity_the_baseline_absorbs_by_moving_the_magnet_is_named():
+    """The paper's set-up seen from above with a 0.5 g tip mass: the plain least squares
+    absorbs the weight by moving the magnet 30 mm up (and called the data explained);
+    with priors the baseline is not physical, gravity beats the prior-bounded baseline
+    with physical parameters and is named alone."""
+    m = _top_sweep(("gravity",), {"tip_mass": 0.5e-3})
+    result = diagnose(DEMO, m, candidates=("torsion", "gravity"))
+    doc = result.to_json()
+    assert [c.name for c in result.causes] == ["gravity"], result.candidates
+    assert doc["baseline"]["physical"] is False and doc["final"]["physical"] is True
+    assert doc["baseline_within_priors"]["physical"] is True
+    assert abs(doc["final"]["params"]["tip_mass_g"] - 0.5) < 0.25
