@@ -187,6 +187,7 @@ class Search:
         self.refit_from: set[str] = set()
         self.ahead: Background[Job, Fit | Exception] | None = None
         self.bounded: Fit | None = None
+        self.baseline_within: Fit | None = None
 
     # -------------------------------------------------------------------- the fits
 
@@ -441,6 +442,7 @@ class Search:
                 self.ahead = None
             self.say("baseline within its priors")
             self.bounded = self.fit(frozenset(), starts=[None], within=PULL_LIMIT, cv=True)
+        self.baseline_within = self.bounded  # (for the result; ``bounded`` ends with it)
         self.s_base = self.structure(self.baseline)
         self.s_current = self.s_base
 
@@ -641,5 +643,5 @@ def diagnose(
         candidates=search.tried,
         power=power,
         time_s=time.perf_counter() - t0,
-        bounded=search.bounded,
+        bounded=search.baseline_within,
     )
