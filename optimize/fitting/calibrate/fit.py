@@ -189,6 +189,7 @@ def calibrate(
             max_nfev=max_nfev or 50 * (len(names) + 1),
         )
 
+    rescaled = 1.0  # the factor on the rows' sigmas of the fit's last pass
     for attempt in range(passes):
         sol = solve(u0)
         u0 = sol.x
@@ -198,6 +199,7 @@ def calibrate(
             if 1 / NOISE_AGREES < scale < NOISE_AGREES:
                 break  # the assumed noise was the data's: the weights stand
             prob.sigma = prob.sigma * scale
+            rescaled *= scale
             prob.invalidate()
     u = sol.x
     tolerance = WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))
@@ -302,7 +304,9 @@ def calibrate(
         rmse_mm=float(np.sqrt(np.mean(e**2)) / MM) if e.size else float("nan"),
         max_abs_mm=float(e.max() / MM) if e.size else float("nan"),
         noise_mm=float(np.sqrt(s2) * common / MM),
-        chi2=chi2,
+        # on the rows' own sigmas (fits from several starts compare it; a second pass
+        # weighs the data by the noise it found, which differs from fit to fit)
+        chi2=chi2 * rescaled**2,
         dof=dof,
         converged=bool(sol.status > 0 and unconverged == 0),
         at_bounds=at_bounds,
