@@ -124,7 +124,10 @@ def test_calibrate_fits_torsion_from_stiff_and_soft_transmissions_too(tmp_path):
         np.random.default_rng(seed), frozenset({"torsion"}), points=(16, 30), on_axis=True
     )
     data = save_dataset(tmp_path / "set", case.design, case.measurements)
-    result = run("calibrate", str(data), "--effects", "torsion", "--json", str(tmp_path / "f.json"))
+    # without priors: with them the fit from nominal no longer runs past the snap-through
+    # (it ends at 0.60 mm, the stiff start's 0.47), and the starts are what is tested here
+    args = ("--effects", "torsion", "--no-priors", "--json", str(tmp_path / "f.json"))
+    result = run("calibrate", str(data), *args)
     assert result.exit_code == 0, result.output
     doc = json.loads((tmp_path / "f.json").read_text())
     starts = doc["starts_rmse_mm"]
