@@ -67,7 +67,9 @@ def paper_pulls(design: Design, stiffness: float, field_scale: float) -> dict[st
         "bending_rigidity_scale": math.log(stiffness) / _width("bending_rigidity_scale"),
         "external_remanence": math.log(field_scale) / _width("external_remanence"),
     }
-    for a, centre in zip("xyz", design.external_magnet.center, strict=True):
+    magnet = design.external_magnet
+    assert magnet is not None, "the paper's K_B scales the external magnet"
+    for a, centre in zip("xyz", magnet.center, strict=True):
         spec = PARAMETERS[f"external_center_{a}"].fit
         assert spec is not None
         out[f"external_center_{a}"] = (field_scale - 1) * centre / spec.step / spec.prior

@@ -125,7 +125,7 @@ def calibrate(
     if json_out is not None:
         output_path(json_out, "--json", folder=False, inputs=[data, design_path])
     freed = names or default_free(model.effects)
-    if coordinates(m) < len(freed) and fit_priors is False:
+    if coordinates(m) < len(freed):  # (priors are no data: calibrate refuses it too)
         raise UserError(
             f"{m.source}: {coordinates(m)} measured number(s) in {m.rows_text()} cannot "
             f"determine {len(freed)} parameters ({', '.join(freed)}); measure more "

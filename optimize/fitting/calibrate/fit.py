@@ -72,6 +72,7 @@ def calibrate(
     warm_start: bool = True,
     states: np.ndarray | None = None,
     within: float | None = None,
+    posterior: bool = True,
 ) -> CalibrationResult:
     """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
 
@@ -100,6 +101,10 @@ def calibrate(
     within : with priors, bound each free parameter to its nominal value +- this many
         prior sigmas (the prior-bounded fit: what the model can do with physical
         parameters only, e.g. PULL_LIMIT). [-]
+    posterior : False: the priors only bound the fit (``within``), without their residuals
+        (a least-squares fit within what the bench allows; the power of the data refits
+        so, where its first order, a projection on the data's Jacobian, has no priors
+        either).
     min_solved : the fraction of fitted rows that must have an equilibrium at the start;
         below it :class:`UnsolvedStart` is raised before any fitting (a least-squares fit
         from a start where most rows have no state rarely finds one). [-]
@@ -121,16 +126,15 @@ def calibrate(
         start[name] = float(value)
     fit_rows = np.arange(len(m)) if rows is None else np.arange(len(m))[np.asarray(rows)]
     s_rows = row_sigma(m, sigma)
-    if priors is False:
-        widths = np.full(len(names), np.inf)
-    else:
-        table = prior_widths(priors if isinstance(priors, Mapping) else None)
-        widths = np.array([table[n] for n in names])
+    table = prior_widths(priors if isinstance(priors, Mapping) else None)
+    bounding = np.array([table[n] for n in names])  # what ``within`` counts sigmas of
+    widths = bounding if priors is not False and posterior else np.full(len(names), np.inf)
     prob = _Problem(
         model, base, names, m, fit_rows, s_rows, ordered, widths, tip_angles, np.zeros(len(names))
     )
     prob.warm = warm_start
-    prob.within = within if within is not None and np.isfinite(widths).any() else None
+    prob.prior_sigma = bounding.copy()
+    prob.within = within
     if states is not None:
         if states.shape != (len(m), model.n_unknowns):
             raise ValueError(
@@ -243,21 +247,9 @@ def calibrate(
     chi2 = float(r_data @ r_data)
     s2 = chi2 / dof
     jac = prob.jacobian(u)
-    jtj = jac.T @ jac
-    # Gauss-Newton covariance; along directions the data do not determine (eigenvalues of
-    # J^T J below 1e-10 of the largest) the parameters involved get an infinite error.
-    evals, evecs = np.linalg.eigh(jtj)
-    determined = evals > 1e-10 * max(evals.max(), 1e-300)
-    inv = evecs[:, determined] @ np.diag(1 / evals[determined]) @ evecs[:, determined].T
-    cov_u = inv * s2
-    sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
-    undetermined = (np.abs(evecs[:, ~determined]) > 1e-3).any(axis=1)
-    sd_u[undetermined] = np.inf
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov_u / np.outer(sd_u, sd_u)
-    corr[undetermined, :] = np.nan
-    corr[:, undetermined] = np.nan
-    np.fill_diagonal(corr, 1.0)
+    # the posterior's (with the priors' rows), and the data's alone (what they separate)
+    sd_u, corr, _, rank = _covariance(jac, s2)
+    data_sd_u, data_corr, data_undetermined, data_rank = _covariance(jac[: prob.n_data()], s2)
     message = str(sol.message).rstrip(".")
     if restarted:
         message += (
@@ -269,12 +261,12 @@ def calibrate(
             "; better from the first answer with some parameters back at the start "
             "(the start lies where the ramp tips those rows to other states)"
         )
-    rank = int(determined.sum())
-    if rank < len(names):
-        loose = ", ".join(n for n, u in zip(names, undetermined, strict=True) if u)
+    if data_rank < len(names):
+        loose = ", ".join(n for n, u in zip(names, data_undetermined, strict=True) if u)
         message += (
-            f"; the data determine only {rank} of {len(names)} parameter combinations "
-            f"({loose} trade off against each other: free fewer, or use priors)"
+            f"; the data determine only {data_rank} of {len(names)} parameter combinations "
+            f"({loose} trade off against each other: free fewer"
+            + (", or use priors)" if rank < len(names) else "; the priors fix them)")
         )
     dpdu = prob.dp_du(u)
     at_bounds = tuple(
@@ -296,6 +288,8 @@ def calibrate(
         standard_error={n: float(abs(dpdu[j]) * sd_u[j]) for j, n in enumerate(names)},
         nominal=nominal,
         correlation=corr,
+        data_standard_error={n: float(abs(dpdu[j]) * data_sd_u[j]) for j, n in enumerate(names)},
+        data_correlation=data_corr,
         params=p,
         effects=model.effects,
         residuals=residuals,
@@ -315,10 +309,30 @@ def calibrate(
         time_s=time.perf_counter() - t0,
         message=message,
         priors=bool(np.isfinite(widths).any()),
-        prior_width=dict(zip(names, map(float, widths), strict=True)),
+        prior_width={} if priors is False else dict(zip(names, map(float, bounding), strict=True)),
         within=prob.within,
         prior_chi2=float(np.sum(np.where(np.isfinite(widths), u / widths, 0.0) ** 2)),
         states=np.where(pred.equilibria.converged[:, None], pred.equilibria.unknowns, np.nan),
         jacobian=jac[: prob.n_data()],
         jacobian_rows=np.concatenate([np.nonzero(prob.pos_mask)[0], np.nonzero(prob.ang_mask)[0]]),
     )
+
+
+def _covariance(jac: np.ndarray, s2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The Gauss-Newton covariance (J^T J)^-1 s2 of weighted residuals with Jacobian
+    ``jac`` (fit units): the standard errors, the correlation, which parameters lie along
+    directions ``jac`` does not determine (eigenvalues of J^T J below 1e-10 of the
+    largest: their error infinite, their correlations NaN), and the rank."""
+    evals, evecs = np.linalg.eigh(jac.T @ jac)
+    determined = evals > 1e-10 * max(evals.max(initial=0.0), 1e-300)
+    inv = evecs[:, determined] @ np.diag(1 / evals[determined]) @ evecs[:, determined].T
+    cov_u = inv * s2
+    sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
+    undetermined = (np.abs(evecs[:, ~determined]) > 1e-3).any(axis=1)
+    sd_u[undetermined] = np.inf
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_u / np.outer(sd_u, sd_u)
+    corr[undetermined, :] = np.nan
+    corr[:, undetermined] = np.nan
+    np.fill_diagonal(corr, 1.0)
+    return sd_u, corr, undetermined, int(determined.sum())

@@ -88,9 +88,15 @@ class CalibrationResult:
     time_s: float
     message: str = ""
     priors: bool = field(default=False)
+    data_standard_error: dict[str, float] = field(default_factory=dict)
+    """The standard errors the data alone give (without the priors' residuals; the same
+    as ``standard_error`` for a fit without priors): what the data separate. [SI]"""
+    data_correlation: np.ndarray | None = field(default=None, repr=False)
+    """The correlation of the data alone (as ``data_standard_error``)."""
     prior_width: dict[str, float] = field(default_factory=dict)
     """Each free parameter's one-sigma prior in fit units (log: of ln(value / nominal));
-    infinite or absent: none (:mod:`optimize.fitting.calibrate.priors`)."""
+    infinite: none (:mod:`optimize.fitting.calibrate.priors`); empty for a fit given no
+    priors (judged by the defaults)."""
     within: float | None = None
     """The prior-bounded fit's bounds, in prior sigmas (calibrate's ``within``); None: the
     registry's bounds only."""
@@ -108,9 +114,9 @@ class CalibrationResult:
     def width(self, name: str) -> float:
         """The prior width ``name`` is judged by, fit units: the fit's own, or the default
         (:func:`optimize.fitting.calibrate.priors.prior_widths`) for a fit without priors."""
-        if self.priors:
-            return self.prior_width.get(name, math.inf)
-        return float(FREE_PARAMETERS[name].prior)
+        if name in self.prior_width:
+            return self.prior_width[name]
+        return math.inf if self.priors else float(FREE_PARAMETERS[name].prior)
 
     def beyond_prior(self, limit: float = PULL_LIMIT) -> dict[str, float]:
         """The estimates more than ``limit`` prior sigmas from nominal, with their pulls:

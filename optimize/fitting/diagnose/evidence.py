@@ -159,10 +159,10 @@ def _bic_verdict(c: Candidate) -> str:
 
 def _unphysical(fit: Fit) -> str:
     """'' where every estimate of ``fit`` lies within PULL_LIMIT prior sigmas of its
-    nominal value (or it was fitted without priors); else what it needs, as 'needs
+    nominal value (or it was given no priors); else what it needs, as 'needs
     <parameter> = <value> (<pull> prior sigmas), ...'. [-]"""
     cal = fit.calibration
-    if not cal.priors:
+    if not cal.prior_width:
         return ""
     beyond = cal.beyond_prior()
     if not beyond:

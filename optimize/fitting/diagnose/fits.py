@@ -68,12 +68,21 @@ def _fit(
     estimates, and its states if it is of this model; a mapping: these values, the others
     nominal), keep the best, and
     cross-validate it if ``cv``. ``free``: the free parameters (default: the effects'
-    :func:`default_free`)."""
+    :func:`default_free`). ``priors`` (:mod:`optimize.fitting.calibrate.priors`: True, the
+    defaults; a mapping, widths overridden; False, none) do not pull the fit, a least
+    squares fit as without them: they judge its estimates (their pulls) and, with
+    ``within``, bound each parameter to its nominal value +- that many prior sigmas."""
     free = tuple(free) or default_free(effects)
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
-    options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev, "priors": priors}
+    # the priors judge and (``within``) bound the fit; the diagnosis fits by least squares
+    options: dict[str, Any] = {
+        "sigma": sigma,
+        "max_nfev": max_nfev,
+        "priors": priors,
+        "posterior": False,
+    }
     if within is not None:  # the prior-bounded fit (calibrate's ``within``)
         options["within"] = within
     if max_nfev is not None:  # a screen: skip starts where most rows have no state
@@ -168,7 +177,7 @@ def _cross_validated(
         for n in cal.names
         if np.isfinite(error[n]) and error[n] > 0
     }
-    priors = {n: w for n, w in cal.prior_width.items()} if cal.priors else False
+    priors = dict(cal.prior_width) or False
     held_out = cross_validate(
         design,
         m,
@@ -183,6 +192,7 @@ def _cross_validated(
         ordered=fit.ordered,
         anchor=anchor,
         priors=priors,
+        posterior=cal.priors,
         within=cal.within,
     )
     return replace(fit, cv_rmse_mm=held_out.rmse_mm, cv_expected_ratio=held_out.expected_ratio)

@@ -16,7 +16,6 @@ from design.registry import index
 from design.units import DEG, MM
 from optimize.fitting.calibrate import (
     EFFECT_FREE,
-    CalibrationResult,
     predict,
     row_sigma,
 )
@@ -96,7 +95,8 @@ def power_of_data(
                 sigma=sigma,
                 max_nfev=SCREEN_EVALUATIONS,
                 free=final.calibration.names,
-                priors=_priors_of(final.calibration),
+                priors=dict(final.calibration.prior_width) or False,
+                within=final.calibration.within,
             )
             if fit.unsolved:
                 return {
@@ -147,8 +147,3 @@ def _unabsorbed(
     weighted = change / s
     step = np.linalg.lstsq(jac, weighted, rcond=None)[0]
     return float(np.sum(((weighted - jac @ step) * s) ** 2))
-
-
-def _priors_of(cal: CalibrationResult) -> bool | dict[str, float]:
-    """The priors ``cal`` was fitted with (its widths), or False."""
-    return dict(cal.prior_width) if cal.priors else False

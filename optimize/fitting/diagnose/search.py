@@ -264,9 +264,7 @@ class Search:
         try:
             if isinstance(start, str):  # STIFF_FIRST
                 try:
-                    found = stiff_start(
-                        self.design, self.m, effects, free, sigma=self.sigma, priors=self.priors
-                    )
+                    found = stiff_start(self.design, self.m, effects, free, sigma=self.sigma)
                 except Exception as exc:  # a start not found is skipped, as one unsolved
                     return UnsolvedStart(f"{STIFF_FIRST}: {_reason(exc)}")
                 assert found is not None  # only torsion candidates get this start
@@ -614,10 +612,13 @@ def diagnose(
     k : folds of the cross-validation over configurations. seed : its shuffling.
     sigma : one-sigma position noise for rows that do not state one. [m]
     progress : called with a short message before each fit.
-    priors : every fit maximises the posterior with these priors
-        (:mod:`optimize.fitting.calibrate.priors`: True, the defaults; a mapping, widths
-        overridden; False, none, the plain least squares): a model explains the data only
-        with every estimate within PULL_LIMIT prior sigmas of its nominal value.
+    priors : what the bench knows (:mod:`optimize.fitting.calibrate.priors`: True, the
+        defaults; a mapping, widths overridden; False, none: the diagnosis before priors):
+        a model explains the data only with every estimate within PULL_LIMIT prior sigmas
+        of its nominal value. The fits stay least squares (a baseline within its priors
+        is fitted, and diagnosed, as without them); where the calibrated baseline needs a
+        parameter beyond them, the baseline fitted within them (bounded to PULL_LIMIT
+        sigmas) is the model candidates must beat, and the power is judged against it.
 
     A candidate whose fit fails is reported (``candidates``, 'fit failed: ...') and the
     search goes on without it.

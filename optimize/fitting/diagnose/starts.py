@@ -107,7 +107,14 @@ def _prefix_start(
     early[order[:rows]] = True
     try:
         own = calibrate(
-            design, m.subset(early), effects, free, ordered="driven", sigma=sigma, priors=priors
+            design,
+            m.subset(early),
+            effects,
+            free,
+            ordered="driven",
+            sigma=sigma,
+            priors=priors,
+            posterior=False,
         )
     except UnsolvedStart:
         return None
