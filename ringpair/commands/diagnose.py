@@ -224,7 +224,13 @@ def _pulls(cal: CalibrationResult) -> str:
             f"{row['name']} {row['estimate']:.5g}{unit} (nominal {row['nominal']:.5g}, prior "
             f"sigma {sigma}, pull {row['pull']:+.1f}){mark}"
         )
-    judged = "priors" if cal.priors else "fitted without priors; pulls against the default priors"
+    judged = (
+        "the posterior"
+        if cal.priors
+        else "least squares, judged by the priors"
+        if cal.prior_width
+        else "no priors given; pulls against the default priors"
+    )
     return f"estimates and pulls ({judged}): " + "; ".join(parts)
 
 
