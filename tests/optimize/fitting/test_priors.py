@@ -172,3 +172,22 @@ def test_gravity_the_baseline_absorbs_by_moving_the_magnet_is_named():
     assert doc["baseline"]["physical"] is False and doc["final"]["physical"] is True
     assert doc["baseline_within_priors"]["physical"] is True
     assert abs(doc["final"]["params"]["tip_mass_g"] - 0.5) < 0.25
+
+
+def test_a_fit_the_priors_only_judge_and_bound_is_the_least_squares_fit():
+    """The diagnosis' fits (``posterior=False``): given the priors they are the plain
+    least squares (same estimates, no prior term), judged by the priors' widths; bounded
+    to ``within`` prior sigmas they stay inside and cost misfit where the plain fit went
+    beyond (the paper's set-up with a 0.5 g tip mass: it moves the magnet tens of mm)."""
+    m = _top_sweep(("gravity",), {"tip_mass": 0.5e-3})
+    plain = calibrate(DEMO, m, (), priors=False)
+    judged = calibrate(DEMO, m, (), priors=True, posterior=False)
+    assert judged.estimate == plain.estimate and judged.chi2 == plain.chi2
+    assert not judged.priors and judged.prior_chi2 == 0.0
+    assert judged.pulls() == plain.pulls() and judged.beyond_prior()
+    wide = parse_prior_options(["external_center_mm=50", "bending_rigidity_scale=2"])
+    assert not calibrate(DEMO, m, (), priors=wide, posterior=False).beyond_prior()
+    bounded = calibrate(DEMO, m, (), priors=True, posterior=False, within=PULL_LIMIT)
+    assert bounded.within == PULL_LIMIT and bounded.prior_chi2 == 0.0
+    assert all(abs(p) <= PULL_LIMIT + 1e-9 for p in bounded.pulls().values()), bounded.pulls()
+    assert bounded.chi2 > plain.chi2
