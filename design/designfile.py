@@ -31,6 +31,7 @@ from design.geometry import (
     ring_centres,
     ring_clears_wire,
 )
+from design.mounting import design_tip_geometry
 from design.obstacles import KINDS, gaps, tip_body
 from design.process import DEFAULT_PROCESS, PROCESSES
 from design.records import (
@@ -259,9 +260,23 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
         environment = Environment(gravity=env.get("gravity_m_s2"), obstacles=obstacles)
 
     design = Design(name, robot, tip, ext, environment, description, sources)
+    _check_rod(design)
     _check_clearance(design)
     _check_obstacles(design)
     return design
+
+
+def _check_rod(design: Design) -> None:
+    """Reject a free length the printed tip's rigid segment leaves no flexible rod under
+    (:meth:`design.mounting.TipGeometry.rod_length`)."""
+    geometry = design_tip_geometry(design)
+    if not geometry.rod_length(design.robot.free_length) > 0:
+        raise DesignError(
+            "robot.free_length_mm must be longer than the printed tip's rigid offset "
+            f"({geometry.rigid_offset / MM:.4g} mm from where the catheter enters the "
+            "proximal mounting piece to the proximal ring's centre, set by [tip] and "
+            f"[tip.mounting]) so a flexible rod remains; got {design.robot.free_length / MM:g}"
+        )
 
 
 def _external_magnet(doc: dict[str, Any]) -> ExternalMagnet:
