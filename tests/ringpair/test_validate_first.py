@@ -88,9 +88,9 @@ def test_a_device_input_is_refused(run, device, tmp_path):
 
 
 def test_an_oversized_input_is_refused(tmp_path, run, monkeypatch):
-    from design import designfile
+    from design.designfile import inputs
 
-    monkeypatch.setattr(designfile, "MAX_INPUT_BYTES", 1000)
+    monkeypatch.setattr(inputs, "MAX_INPUT_BYTES", 1000)
     big = tmp_path / "d.toml"
     big.write_text("# " + "x" * 2000 + "\n")
     one_message(run("show", str(big)), "bytes, more than 1,000")
