@@ -256,7 +256,14 @@ def mounting_dims(
     Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
     dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
     w = mm(tip.mounting.wall)
-    require(mm(tip.magnet_length) > 0, "tip ring: magnet length", "positive", mm(tip.magnet_length))
+    # a ring shorter than the meshes' chord tolerance has no seat the CAD can draw and mesh
+    # (1e-300 mm left the tessellation without faces)
+    require(
+        mm(tip.magnet_length) >= proc.linear_deflection_mm,
+        "tip ring: magnet length (tip.magnet_length_mm)",
+        f"at least the {proc.name} meshes' chord tolerance ({proc.linear_deflection_mm:g} mm)",
+        mm(tip.magnet_length),
+    )
     require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
     q = quantities(design)
     require(

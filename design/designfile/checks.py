@@ -1,5 +1,6 @@
-"""Checks of a whole design that no single key can make: a permanent magnet clear of the
-straight robot, the straight robot's tip outside every obstacle."""
+"""Checks of a whole design that no single key can make: a flexible rod left under the
+printed tip, a permanent magnet clear of the straight robot, the straight robot's tip
+outside every obstacle."""
 
 from __future__ import annotations
 
@@ -12,9 +13,23 @@ from design.designfile.keys import DesignError
 from design.fields.sources import KINDS as SOURCE_KINDS
 from design.fields.sources import PERMANENT, magnet_distance
 from design.geometry import cylinder_distance, rest_position, ring_centres
+from design.mounting import design_tip_geometry
 from design.obstacles import gaps, tip_body
 from design.records import Design, Source
 from design.units import MM
+
+
+def _check_rod(design: Design) -> None:
+    """Reject a free length the printed tip's rigid segment leaves no flexible rod under
+    (:meth:`design.mounting.TipGeometry.rod_length`)."""
+    geometry = design_tip_geometry(design)
+    if not geometry.rod_length(design.robot.free_length) > 0:
+        raise DesignError(
+            "robot.free_length_mm must be longer than the printed tip's rigid offset "
+            f"({geometry.rigid_offset / MM:.4g} mm from where the catheter enters the "
+            "proximal mounting piece to the proximal ring's centre, set by [tip] and "
+            f"[tip.mounting]) so a flexible rod remains; got {design.robot.free_length / MM:g}"
+        )
 
 
 def _check_obstacles(design: Design) -> None:
