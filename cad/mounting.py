@@ -311,7 +311,7 @@ def mounting_dims(
     d = {name: mm(float(getattr(g, name))) for name in _LENGTHS}
     # the ring rests on the pocket floor: its bore over the larger of wire bore and passage
     # (the message names the wire bore where the wire bore alone is too wide)
-    seated = admits("ring_seat", q | {"wire_bore": float(g.wire_bore)})
+    seated = admits("ring_seat", quantities(design, g))
     require(
         seated or d["wire_bore"] < dm,
         "distal piece: wire bore diameter (wire + fit allowance)",

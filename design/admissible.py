@@ -1,18 +1,21 @@
 """Geometric admissibility of a design: the rules every robot must satisfy to be made,
 each written once (walls, the rings' bore over the wire, the wire in the catheter, the
-rings' seat on the printed pieces).
+rings' seat on the printed pieces, a flexible rod under the printed tip).
 
 A rule is a *margin*, a function of named quantities (the registry's parameter names,
-:data:`design.registry.NAMES`, and ``wire_bore``, the printed distal piece's wire bore,
-:func:`design.mounting.tip_geometry`) that works on numbers and on CasADi symbols alike,
-and the *least* admissible margin. Its consumers:
+:data:`design.registry.NAMES`, and of the printed pieces, :class:`design.mounting.TipGeometry`:
+``wire_bore``, the distal piece's wire bore, and ``rod_length``, the flexible rod under the
+rigid tip) that works on numbers and on CasADi symbols alike, and the *least* admissible
+margin. Its consumers:
 
 - the design-file reader (:mod:`design.designfile`) raises where a margin is not
   admissible (:meth:`Rule.admits`);
 - the CAD (:mod:`cad.mounting`) refuses to build such pieces;
 - the NLP (:mod:`optimize.sizing.nlp_problem`) bounds each margin, a constraint row named
   as the rule, from below by :meth:`Rule.bound`: the rule's least, raised to the study's
-  own limit (``wire_clearance``, ``min_wall``: a study may ask for more, never less).
+  own limit (``wire_clearance``, ``min_wall``: a study may ask for more, never less); all
+  but ``wire_wall`` and ``rod_length``, not rows yet (a new row moves every optimum at the
+  solver's tolerance).
 
 SI units: margins and limits in m.
 """
@@ -26,6 +29,7 @@ from typing import Any
 import casadi as ca
 
 from design.geometry import is_symbolic
+from design.mounting import TipGeometry
 from design.records import Design
 from design.registry import PARAMETERS
 from design.units import MM
@@ -104,10 +108,16 @@ RULES: dict[str, Rule] = {
             limit="wire_clearance",
         ),
         Rule(
+            "rod_length",
+            "flexible rod under the printed tip (free length less the tip's rigid offset)",
+            lambda q: q["rod_length"],
+        ),
+        Rule(
             "ring_seat",
             "ring bore minus the printed pieces' wire bore and passage",
-            lambda q: q["magnet_inner_diameter"]
-            - _max(q["wire_bore"], q["catheter_inner_diameter"]),
+            lambda q: (
+                q["magnet_inner_diameter"] - _max(q["wire_bore"], q["catheter_inner_diameter"])
+            ),
             limit="wire_clearance",
         ),
     )
@@ -115,18 +125,17 @@ RULES: dict[str, Rule] = {
 """The rules by name."""
 
 _NAMES = tuple(
-    f"{part}_{d}_diameter"
-    for part in ("catheter", "wire", "magnet")
-    for d in ("outer", "inner")
+    f"{part}_{d}_diameter" for part in ("catheter", "wire", "magnet") for d in ("outer", "inner")
 )
 
 
-def quantities(design: Design, wire_bore: float | None = None) -> dict[str, float]:
-    """The quantities of ``design`` the rules read [m]; ``wire_bore`` (of its printed
-    pieces, :func:`design.mounting.design_tip_geometry`) where given."""
+def quantities(design: Design, tip: TipGeometry | None = None) -> dict[str, float]:
+    """The quantities of ``design`` the rules read [m]; with ``tip``, its printed pieces
+    (:func:`design.mounting.design_tip_geometry`), those of the pieces too."""
     q = {n: PARAMETERS[n].value(design) for n in _NAMES}
-    if wire_bore is not None:
-        q["wire_bore"] = wire_bore
+    if tip is not None:
+        q["wire_bore"] = float(tip.wire_bore)
+        q["rod_length"] = float(tip.rod_length(design.robot.free_length))
     return q
 
 

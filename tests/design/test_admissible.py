@@ -111,7 +111,7 @@ def test_the_cad_refuses_and_the_nlp_row_is_negative_where_the_rings_do_not_seat
         bore = design.robot.wire.outer_diameter + design.tip.mounting.fit_allowance
         seat = design.tip.magnet_inner_diameter - max(bore, design.robot.catheter.inner_diameter)
         assert float(tip.wire_bore) == pytest.approx(bore, abs=1e-15), f"seed {seed}"
-        q = quantities(design, float(tip.wire_bore))
+        q = quantities(design, tip)
         assert RULES["ring_seat"].margin(q) == pytest.approx(seat, abs=1e-15), f"seed {seed}"
         nlp = np.asarray(rows(parameter_vector(design))[0]).ravel()
         for name in ("ring_on_wire", "wire_in_catheter", "ring_wall", "catheter_wall", "ring_seat"):
