@@ -9,6 +9,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from design.admissible import admits, quantities
 from design.designfile.keys import DesignError
 from design.fields.sources import KINDS as SOURCE_KINDS
 from design.fields.sources import PERMANENT, magnet_distance
@@ -23,7 +24,7 @@ def _check_rod(design: Design) -> None:
     """Reject a free length the printed tip's rigid segment leaves no flexible rod under
     (:meth:`design.mounting.TipGeometry.rod_length`)."""
     geometry = design_tip_geometry(design)
-    if not geometry.rod_length(design.robot.free_length) > 0:
+    if not admits("rod_length", quantities(design, geometry)):
         raise DesignError(
             "robot.free_length_mm must be longer than the printed tip's rigid offset "
             f"({geometry.rigid_offset / MM:.4g} mm from where the catheter enters the "

@@ -9,12 +9,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from design.admissible import WIRE_CLEARANCE, admits
 from design.designfile.checks import _check_clearance, _check_obstacles, _check_rod
 from design.designfile.environment import _obstacles
 from design.designfile.fields import _external_magnet, _sources
 from design.designfile.inputs import read_input
 from design.designfile.keys import TOP_KEYS, DesignError, _section
-from design.geometry import WIRE_CLEARANCE, ring_clears_wire
 from design.process import DEFAULT_PROCESS, PROCESSES
 from design.records import Design, Environment, Mounting, Robot, Tip, Tube
 from design.registry import PARAMETERS
@@ -25,7 +25,8 @@ from design.units import MM
 def _tube(doc: dict[str, Any], name: str) -> Tube:
     s = _section(doc, name)
     od, idia = s["outer_diameter_mm"], s["inner_diameter_mm"]
-    if idia >= od:
+    tube = name.rsplit(".", 1)[1]
+    if not admits(f"{tube}_wall", {f"{tube}_outer_diameter": od, f"{tube}_inner_diameter": idia}):
         raise DesignError(
             f"{name}.inner_diameter_mm must be smaller than outer_diameter_mm "
             f"({od / MM:g}); got {idia / MM:g}"
@@ -56,7 +57,11 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
     robot_s = _section(doc, "robot")
     catheter = _tube(doc, "robot.catheter")
     wire = _tube(doc, "robot.wire")
-    if wire.outer_diameter >= catheter.inner_diameter:
+    bore = {
+        "catheter_inner_diameter": catheter.inner_diameter,
+        "wire_outer_diameter": wire.outer_diameter,
+    }
+    if not admits("wire_in_catheter", bore):
         raise DesignError(
             "robot.wire.outer_diameter_mm must be smaller than robot.catheter.inner_diameter_mm "
             f"({catheter.inner_diameter / MM:g}) so the wire fits inside the catheter; "
@@ -75,12 +80,17 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
         t["mass_g"],
         _mounting(doc),
     )
-    if tip.magnet_inner_diameter >= tip.magnet_outer_diameter:
+    ring = {
+        "magnet_outer_diameter": tip.magnet_outer_diameter,
+        "magnet_inner_diameter": tip.magnet_inner_diameter,
+        "wire_outer_diameter": wire.outer_diameter,
+    }
+    if not admits("ring_wall", ring):
         raise DesignError(
             "tip.magnet_inner_diameter_mm must be smaller than magnet_outer_diameter_mm "
             f"({tip.magnet_outer_diameter / MM:g}); got {tip.magnet_inner_diameter / MM:g}"
         )
-    if not ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter):
+    if not admits("ring_on_wire", ring):
         raise DesignError(
             "tip.magnet_inner_diameter_mm must be at least robot.wire.outer_diameter_mm "
             f"({wire.outer_diameter / MM:g}) plus {WIRE_CLEARANCE / MM:g} so the wire turns "

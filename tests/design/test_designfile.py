@@ -92,7 +92,7 @@ def test_nearly_unit_magnetization_is_normalised(demonstrator_doc):
 
 @pytest.mark.parametrize(("bore_mm", "fits"), [(0.45, True), (0.449, False), (0.4, False)])
 def test_ring_bore_must_clear_the_wire_by_the_running_clearance(demonstrator_doc, bore_mm, fits):
-    # The demonstrator's wire is 0.4 mm; the bore needs design.geometry.WIRE_CLEARANCE more.
+    # The demonstrator's wire is 0.4 mm; the bore needs design.admissible.WIRE_CLEARANCE more.
     doc = edited(demonstrator_doc, "tip.magnet_inner_diameter_mm", bore_mm)
     if fits:
         assert design_from_dict(doc).tip.magnet_inner_diameter == pytest.approx(0.45e-3)

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from design.geometry import ring_clears_wire
+from design.admissible import admits, quantities
 from design.processes import raise_if_interrupted
 from design.registry import NAMES
 from optimize.sizing.materials import Material, material
@@ -65,15 +65,9 @@ def _start_points(study: Study, count: int) -> list[np.ndarray]:
         for _ in range(100):
             z = lo + (hi - lo) * rng.random(len(lo))
             vals = dict(zip(names, z, strict=True))
-            d = candidate_design(study, vals)
-            ok = (
-                d.tip.magnet_inner_diameter < d.tip.magnet_outer_diameter
-                and d.robot.catheter.inner_diameter < d.robot.catheter.outer_diameter
-                and d.robot.wire.outer_diameter < d.robot.catheter.inner_diameter
-                and ring_clears_wire(
-                    d.tip.magnet_inner_diameter, d.robot.wire.outer_diameter, clearance
-                )
-            )
+            q = quantities(candidate_design(study, vals))
+            ok = all(admits(r, q) for r in ("ring_wall", "catheter_wall", "wire_in_catheter"))
+            ok = ok and admits("ring_on_wire", q, clearance)
             if ok:
                 break
         out.append(z)
