@@ -29,6 +29,8 @@ from design.steering import REACHED, Steering, steer
 from design.units import MM
 from ringpair.options import (
     DESIGN,
+    MAX_CONFIGS,
+    FloatRange,
     UserError,
     check_request,
     console,
@@ -40,6 +42,7 @@ from ringpair.options import (
     path_option,
 )
 from ringpair.plots import plot_path
+from ringpair.pressing import PRESS_STEP, steer_press
 from ringpair.tables import write_csv
 
 TARGET_SECONDS = 0.1
@@ -187,6 +190,21 @@ def steer_rows(result: Steering) -> list[dict]:
     "workspace's centre, the mean tip with the rings parallel).",
 )
 @click.option("--closed", is_flag=True, help="A CSV path returns to its first point.")
+@click.option(
+    "--press",
+    type=FloatRange(0.0, None, min_open=True),
+    default=None,
+    metavar="MN",
+    help="Press the tip on the design's obstacles with this force [mN]: every pair of ring "
+    "angles that does, found where the curves of that force cross the ring grid's lines. "
+    "Writes simulate's columns per answer and the force map with the answers marked.",
+)
+@click.option(
+    "--step",
+    type=FloatRange(0.1, 90.0),
+    default=None,
+    help=f"Grid step of both rings for --press [deg] (default {PRESS_STEP:g}).",
+)
 @path_option(
     "--out",
     help="CSV to write. Default: outputs/<design name>/steer.csv (steer_path.csv with "
@@ -201,6 +219,7 @@ def steer_rows(result: Steering) -> list[dict]:
     help="Refuse more targets than this (about a tenth of a second each with the model for "
     "design work; the estimate is given); raise it for a long run.",
 )
+@MAX_CONFIGS
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
 def steer_command(
     design: Path | None,
@@ -210,13 +229,16 @@ def steer_command(
     points: int | None,
     center: str | None,
     closed: bool,
+    press: float | None,
+    step: float | None,
     out: Path | None,
     effects: str,
     max_targets: int,
+    max_configs: int,
     quiet: bool,
 ) -> None:
-    """The ring angles that put the tip of DESIGN at each target (y, z), or drive it along
-    a path.
+    """The ring angles that put the tip of DESIGN at each target (y, z), drive it along a
+    path, or press it on the design's obstacles with a force.
 
     Targets (--to, --targets): every pair of ring angles whose state (the stable
     equilibrium the robot reaches with the rings held there) puts the tip on the target, to
@@ -235,9 +257,26 @@ def steer_command(
     theta2_deg (continuous along the path), knob1_turns, knob2_turns (turns of the
     actuator's knobs from the first point: the wire's and the catheter's worm drive), y_mm,
     z_mm (the driven tip), error_mm, reached, snapped (the move into this point snapped).
+
+    A force (--press MN): frictionless contact holds the force along the obstacle's
+    normal, so the ring angles that press with a magnitude form curves over both ring
+    angles; every point where they cross the lines of a --step grid, located to 0.0001 mN.
+    One row per answer with simulate's columns (contact force, point, stiffness), the
+    force map with the answers marked beside the CSV (.png).
     """
     d = design_from(design)
     model = model_from(effects).for_design(d)
+    if press is not None:
+        if to or targets is not None or path_spec is not None:
+            raise UserError(
+                "--press finds angles for a force; give it without --to, --targets or --path"
+            )
+        if points is not None or center is not None or closed:
+            raise UserError("--points, --center and --closed belong to --path")
+        steer_press(d, model, design, press, step, out, max_configs)
+        return
+    if step is not None:
+        raise UserError("--step is the grid of --press")
     if path_spec is not None:
         if to or targets is not None:
             raise UserError("--path drives along a path; give it without --to or --targets")
