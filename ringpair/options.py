@@ -329,23 +329,43 @@ def _same(a: Path, b: Path) -> bool:
 def check_configurations(
     n: int, limit: int, what: str, *, solves: int = 1, held: bool = True
 ) -> None:
-    """Size a request up front: refuse (UserError) ``n`` configurations, each solved
-    ``solves`` times (models compared), above ``limit`` solves, giving the size and an
-    estimate of the time (and of the memory, when all are ``held`` at once); below it,
-    announce a run of more than ANNOUNCE seconds on stderr. ``what`` names the options
-    that asked for them."""
+    """Size a request up front (:func:`check_request`): ``n`` configurations, each solved
+    ``solves`` times (models compared), at most ``limit`` solves, at SOLVE_RATE, with the
+    memory when all are ``held`` at once. ``what`` names the options that asked for them."""
     total = n * solves
-    seconds = total / SOLVE_RATE
-    if total <= limit:
+    check_request(
+        total,
+        limit,
+        what,
+        f"{n:,} configurations" + (f" x {solves} models = {total:,} solves" if solves > 1 else ""),
+        total / SOLVE_RATE,
+        "--max-configs",
+        n * ROW_BYTES if held else None,
+    )
+
+
+def check_request(
+    count: int,
+    limit: int,
+    what: str,
+    size: str,
+    seconds: float,
+    raise_with: str,
+    memory: float | None = None,
+) -> None:
+    """Size a request before any work: refuse (UserError) ``count`` pieces of work above
+    ``limit``, saying its ``size`` (text), the time estimate ``seconds`` [s] and, if given,
+    the ``memory`` [bytes]; below it, announce on stderr a run estimated above ANNOUNCE
+    seconds. ``what`` names the options that asked for it, ``raise_with`` the option that
+    lifts the limit."""
+    if count <= limit:
         if seconds > ANNOUNCE:
-            err_console.print(f"solving {total:,} configurations: about {duration(seconds)}")
+            err_console.print(f"{what}: {size}, about {duration(seconds)}")
         return
-    memory = f" and {n * ROW_BYTES / 1e9:.3g} GB of memory" if held else ""
+    held = f" and {memory / 1e9:.3g} GB of memory" if memory is not None else ""
     raise UserError(
-        f"{what}: {n:,} configurations"
-        + (f" x {solves} models = {total:,} solves" if solves > 1 else "")
-        + f", about {duration(seconds)}{memory}; at most {limit:,} are solved unless "
-        "--max-configs says more"
+        f"{what}: {size}, about {duration(seconds)}{held}; at most {limit:,} unless "
+        f"{raise_with} says more"
     )
 
 
