@@ -133,43 +133,7 @@ def run_folder(out: Path, command: str) -> Iterator[RunFolder]:
         os.close(fd)
 
 
-@contextlib.contextmanager
-def held_run(out: Path, command: str, keep: Iterable[str] = ()) -> Iterator[RunFolder]:
-    """A command's run writing the folder ``out`` as one run's (:func:`run_folder`), for
-    the commands that write a folder without a study's stages (``cad``, ``workspace``,
-    ``optimize``): another run in it is refused (UserError naming --out); an interrupted
-    earlier run is warned about; when the run ends, whole (normally or by its exit code,
-    e.g. ``cad``'s 3 for a failed check), the earlier run's outputs that this run did not
-    write again are removed (:meth:`RunFolder.remove_stale`, but never under the folders
-    ``keep``, e.g. ``optimize``'s resumable ``points``) and ``manifest.json`` lists the
-    files this run wrote. A run that fails in a folder it made, before writing anything,
-    leaves no folder."""
-    from ringpair.options import UserError, warn
-
-    made = not out.exists()
-    try:
-        with run_folder(out, command) as folder:
-            if folder.interrupted is not None:
-                warn(
-                    f"the previous run into {out} was interrupted; its files are replaced, "
-                    "and those of its that this run does not write again are removed"
-                )
-            try:
-                yield folder
-            except SystemExit:
-                _finish(folder, keep)
-                raise
-            _finish(folder, keep)
-    except FolderBusy as exc:
-        raise UserError(f"--out {out}: {exc}") from None
-    except Exception:
-        if made and {p.name for p in out.iterdir()} <= {LOCK}:
-            (out / LOCK).unlink(missing_ok=True)
-            out.rmdir()
-        raise
-
-
-def _finish(folder: RunFolder, keep: Iterable[str]) -> None:
+def finish_run(folder: RunFolder, keep: Iterable[str] = ()) -> None:
     """Remove the earlier run's stale outputs, then write ``manifest.json``: the command,
     the run's folder (an interrupted earlier run, the stale files removed) and every file
     this run wrote (modified since it started), with its size and SHA-256."""
@@ -268,7 +232,7 @@ __all__ = [
     "RUNNING",
     "FolderBusy",
     "RunFolder",
-    "held_run",
+    "finish_run",
     "inputs_key",
     "run_folder",
     "sha256",

@@ -14,6 +14,7 @@ from ringpair.options import (
     console,
     default_out,
     design_from,
+    held_run,
     output_path,
     path_option,
     progress,
@@ -53,7 +54,6 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
         out or default_out(d.name, "cad"), "--out", folder=True, typed=typed, inputs=[design]
     )
     from cad import CadError, build_parts  # after the inputs are checked: CAD loads slowly
-    from ringpair.runs import held_run
 
     with held_run(out, "cad"):
         with progress("building, exporting, checking and rendering parts"), bad_input(CadError):

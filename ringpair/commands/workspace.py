@@ -26,6 +26,7 @@ from ringpair.options import (
     design_from,
     effects_option,
     grid_step_option,
+    held_run,
     json_text,
     model_from,
     output_path,
@@ -90,8 +91,6 @@ def workspace(
         files=FILES,
         inputs=[design],
     )
-    from ringpair.runs import held_run
-
     with held_run(out, "workspace"):
         with progress("sweeping the workspace"):
             try:
