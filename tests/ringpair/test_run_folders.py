@@ -9,7 +9,9 @@ each run takes a second, not a minute."""
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
+import time
 from dataclasses import dataclass
 
 import pytest
@@ -113,3 +115,35 @@ def test_a_workspace_rerun_lists_what_it_wrote_and_keeps_the_users_files(tmp_pat
     listed = {f["path"] for f in _manifest(out)["files"]}
     assert {"workspace.csv", "summary.json", "controllable.png"} <= listed
     assert "notes.txt" not in listed and (out / "notes.txt").read_text() == "mine\n"
+
+
+def test_an_infeasible_optimize_rerun_removes_the_earlier_best_design_and_pareto_files(
+    tmp_path, run
+):
+    # the earlier run's files as its manifest lists them; an infeasible rerun without Pareto
+    # writes neither: they go, the resumable points and the user's file stay
+    from tests.ringpair.test_runs import INFEASIBLE
+
+    study = tmp_path / "s.toml"
+    study.write_text(INFEASIBLE)
+    out = tmp_path / "opt"
+    (out / "points").mkdir(parents=True)
+    earlier = {
+        "best_design.toml": "name = 'old'\n",
+        "pareto_external_distance.csv": "epsilon,objective\n",
+        "points/p.npz": "kept",
+    }
+    files = []
+    for rel, text in earlier.items():
+        (out / rel).write_text(text)
+        digest = hashlib.sha256(text.encode()).hexdigest()
+        files.append({"path": rel, "bytes": len(text), "sha256": digest})
+    (out / "manifest.json").write_text(json.dumps({"files": files}))
+    (out / "notes.txt").write_text("mine\n")
+    time.sleep(0.01)  # the earlier files are older than this run
+    result = run("optimize", str(study), "--no-pareto", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    removed = _manifest(out)["run"]["removed_stale"]
+    assert sorted(removed) == ["best_design.toml", "pareto_external_distance.csv"]
+    assert (out / "points" / "p.npz").exists() and (out / "notes.txt").exists()
+    assert (out / "summary.json").exists() and not (out / "best_design.toml").exists()
