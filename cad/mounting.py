@@ -40,7 +40,7 @@ from cad.errors import require
 from cad.process import CadProcess, get_process, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
-from design.geometry import WIRE_CLEARANCE, ring_clears_wire
+from design.admissible import WIRE_CLEARANCE, admits, quantities
 from design.mounting import GROOVE_RANGE, MAX_STOP_ANGLE, TipGeometry, design_tip_geometry
 from design.process import PROCESSES as SI_PROCESSES
 from design.process import PrintProcess
@@ -269,11 +269,24 @@ def mounting_dims(
     Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
     dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
     w = mm(tip.mounting.wall)
-    require(mm(tip.magnet_length) > 0, "tip ring: magnet length", "positive", mm(tip.magnet_length))
-    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
-    require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
+    # a ring shorter than the meshes' chord tolerance has no seat the CAD can draw and mesh
+    # (1e-300 mm left the tessellation without faces)
     require(
-        ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter),
+        mm(tip.magnet_length) >= proc.linear_deflection_mm,
+        "tip ring: magnet length (tip.magnet_length_mm)",
+        f"at least the {proc.name} meshes' chord tolerance ({proc.linear_deflection_mm:g} mm)",
+        mm(tip.magnet_length),
+    )
+    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
+    q = quantities(design)
+    require(
+        admits("ring_wall", q),
+        "tip ring: magnet bore",
+        f"smaller than its outer diameter ({Dm:g} mm)",
+        dm,
+    )
+    require(
+        admits("ring_on_wire", q),
         "tip ring: magnet bore",
         f"at least the wire diameter ({dw:g} mm) plus {mm(WIRE_CLEARANCE):g} mm so the wire "
         "turns in it",
@@ -309,14 +322,17 @@ def mounting_dims(
         )
     g = tip_geometry_for(design, spec)
     d = {name: mm(float(getattr(g, name))) for name in _LENGTHS}
+    # the ring rests on the pocket floor: its bore over the larger of wire bore and passage
+    # (the message names the wire bore where the wire bore alone is too wide)
+    seated = admits("ring_seat", quantities(design, g))
     require(
-        d["wire_bore"] < dm,
+        seated or d["wire_bore"] < dm,
         "distal piece: wire bore diameter (wire + fit allowance)",
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
         d["wire_bore"],
     )
     require(
-        dc < dm,
+        seated,
         "proximal piece: wire passage diameter (catheter inner diameter)",
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
         dc,

@@ -134,6 +134,11 @@ class TipGeometry:
         flexible rod ends) to the proximal ring's centre, the tracked point. [m]"""
         return self.shoulder_z - self.magnet_length / 2
 
+    def rod_length(self, free_length: Any) -> Any:
+        """The flexible rod under this tip: ``free_length`` (clamp to the tracked point)
+        less :attr:`rigid_offset`; a design is admissible only where it is positive. [m]"""
+        return free_length - self.rigid_offset
+
     @property
     def rigid_length(self) -> Any:
         """The rigid tip segment: proximal face of the proximal piece to the far face of

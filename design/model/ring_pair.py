@@ -191,7 +191,7 @@ class RingPairModel:
         # tracked point (the proximal ring's centre); the baseline has no segment (see the
         # module's docstring).
         offset = s.tip.rigid_offset if printed else 0
-        s.rod_length = length - offset if printed else length
+        s.rod_length = s.tip.rod_length(length) if printed else length
         rod_length = s.rod_length
         angles = x[n_rod:] if torsion else command
         moment = load * s.ring_moment

@@ -187,7 +187,7 @@ def steer_rows(result: Steering) -> list[dict]:
 @path_option(
     "--out",
     help="CSV to write. Default: outputs/<design name>/steer.csv (steer_path.csv with "
-    "--path, and its plot beside it as .png).",
+    "--path, and its plot beside it as .png; with --path the name must end in .csv).",
 )
 @effects_option("default")
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
@@ -348,12 +348,17 @@ def _steer_path(
     if csv_path is None and closed:
         raise UserError("--closed is for a CSV path (circles and ellipses are closed already)")
     center = parse_target(center_text, "--center") if center_text is not None else None
-    out = output_path(
-        out or default_out(d.name, "steer_path.csv"),
-        "--out",
-        folder=False,
-        typed=out is not None,
-        inputs=[design, csv_path],
+    typed = out is not None
+    out = out or default_out(d.name, "steer_path.csv")
+    if out.suffix.lower() != ".csv":
+        # the plot goes beside the CSV with .png: any other name would put both in one file
+        raise UserError(
+            f"--out {out}: with --path, expected a CSV file name ending in .csv (the plot is "
+            f"written beside it as .png); got {out.suffix or 'no suffix'!r}"
+        )
+    out, picture = (
+        output_path(p, "--out", folder=False, typed=typed, inputs=[design, csv_path])
+        for p in (out, out.with_suffix(".png"))
     )
     params = model.parameters(d)
     schedule: PathSchedule | None = None
@@ -393,7 +398,6 @@ def _steer_path(
             f"at {ratio:g} knob turns per ring turn (the actuator's worm drives), from step 1"
         ),
     )
-    picture = out.with_suffix(".png")
     plot_path(schedule, picture, f"{d.name}: {spec} ({model.name} model)")
     if not quiet:
         console.print(_summary(schedule, ratio))

@@ -14,7 +14,7 @@ from design.equilibrium import solve_design
 from design.records import Design
 from design.stiffness import tip_stiffness
 from design.units import MM
-from design.workspace import Workspace, angle_grid, sweep_workspace
+from design.workspace import NoWorkspace, Workspace, angle_grid, sweep_workspace
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -90,7 +90,13 @@ def workspace(
         inputs=[design],
     )
     with progress("sweeping the workspace"):
-        ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
+        try:
+            ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
+        except NoWorkspace as exc:
+            raise UserError(
+                f"design '{d.name}' ({model.name} model) has no workspace to map: {exc}; "
+                "nothing written"
+            ) from None
         sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
         sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
     with progress("driving between neighbouring configurations (the controllable workspace)"):
