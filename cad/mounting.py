@@ -40,7 +40,7 @@ from cad.errors import require
 from cad.process import CadProcess, get_process, mm
 from cad.solids import Z_AXIS, annular_sector, cylinder, radial_port, single_solid
 from cad.tracking import GrooveSpec
-from design.geometry import WIRE_CLEARANCE, ring_clears_wire
+from design.admissible import WIRE_CLEARANCE, admits, quantities
 from design.mounting import GROOVE_RANGE, MAX_STOP_ANGLE, TipGeometry, design_tip_geometry
 from design.process import PROCESSES as SI_PROCESSES
 from design.process import PrintProcess
@@ -124,10 +124,23 @@ class MountingDims:
 
     def groove(self, piece: str) -> GrooveSpec:
         """The tracking groove of ``piece`` (``"proximal"`` or ``"distal"``): its pitch and
-        the notch travel on the visible length (the distal piece's body) less the width."""
-        visible = self.proximal_length if piece == "proximal" else self.body_length
+        the notch travel on the visible length (the proximal piece below its stop notch, the
+        distal piece's body) less the width and a wall at either end."""
+        proximal = self.proximal_length - self.notch_depth
+        visible = proximal if piece == "proximal" else self.body_length
         pitch = self.proximal_pitch if piece == "proximal" else self.distal_pitch
-        return GrooveSpec(pitch, visible - self.groove_width, self.groove_width, self.groove_depth)
+        travel = visible - self.groove_width - 2 * self.wall  # a wall short of either face
+        return GrooveSpec(pitch, travel, self.groove_width, self.groove_depth)
+
+    def groove_span(self, piece: str) -> tuple[float, float]:
+        """z of the groove centre's start and end on ``piece``: a wall plus half the width
+        inside the grooved length (the proximal piece below its notch, the distal piece's
+        body), so the groove ends square inside the faces instead of running out through
+        them. [mm]"""
+        lo = 0.0 if piece == "proximal" else self.journal_length
+        hi = self.proximal_length - self.notch_depth if piece == "proximal" else self.distal_length
+        margin = self.wall + self.groove_width / 2
+        return lo + margin, hi - margin
 
 
 @dataclass(frozen=True)
@@ -256,11 +269,24 @@ def mounting_dims(
     Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
     dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
     w = mm(tip.mounting.wall)
-    require(mm(tip.magnet_length) > 0, "tip ring: magnet length", "positive", mm(tip.magnet_length))
-    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
-    require(dm < Dm, "tip ring: magnet bore", f"smaller than its outer diameter ({Dm:g} mm)", dm)
+    # a ring shorter than the meshes' chord tolerance has no seat the CAD can draw and mesh
+    # (1e-300 mm left the tessellation without faces)
     require(
-        ring_clears_wire(tip.magnet_inner_diameter, wire.outer_diameter),
+        mm(tip.magnet_length) >= proc.linear_deflection_mm,
+        "tip ring: magnet length (tip.magnet_length_mm)",
+        f"at least the {proc.name} meshes' chord tolerance ({proc.linear_deflection_mm:g} mm)",
+        mm(tip.magnet_length),
+    )
+    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
+    q = quantities(design)
+    require(
+        admits("ring_wall", q),
+        "tip ring: magnet bore",
+        f"smaller than its outer diameter ({Dm:g} mm)",
+        dm,
+    )
+    require(
+        admits("ring_on_wire", q),
         "tip ring: magnet bore",
         f"at least the wire diameter ({dw:g} mm) plus {mm(WIRE_CLEARANCE):g} mm so the wire "
         "turns in it",
@@ -296,14 +322,17 @@ def mounting_dims(
         )
     g = tip_geometry_for(design, spec)
     d = {name: mm(float(getattr(g, name))) for name in _LENGTHS}
+    # the ring rests on the pocket floor: its bore over the larger of wire bore and passage
+    # (the message names the wire bore where the wire bore alone is too wide)
+    seated = admits("ring_seat", quantities(design, g))
     require(
-        d["wire_bore"] < dm,
+        seated or d["wire_bore"] < dm,
         "distal piece: wire bore diameter (wire + fit allowance)",
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
         d["wire_bore"],
     )
     require(
-        dc < dm,
+        seated,
         "proximal piece: wire passage diameter (catheter inner diameter)",
         f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
         dc,
@@ -373,8 +402,9 @@ def helical_groove(
     The rectangular profile (``width`` along the axis, ``2 depth`` radially, centred on
     the surface) sits at the helix start in the XZ plane, which contains the axis, and is
     swept along ``cq.Wire.makeHelix`` with a Frenet frame (``isFrenet=True`` keeps it
-    from twisting). The helix runs from ``z_start`` to ``z_end`` (past both faces) and is
-    phased so that the groove crosses +X at z = 0. [mm]
+    from twisting). The helix (the groove's centre) runs from ``z_start`` to ``z_end``,
+    where the groove ends in faces that contain the axis, and is phased so that the groove
+    crosses +X at z = 0. [mm]
     """
     radius = outer_diameter / 2
     height = z_end - z_start
@@ -409,8 +439,7 @@ def proximal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     ]
     groove = None
     if with_groove:
-        e = d.groove_width + 1.0
-        groove = helical_groove(d.outer_diameter, d.groove("proximal"), -e, d.proximal_length + e)
+        groove = helical_groove(d.outer_diameter, d.groove("proximal"), *d.groove_span("proximal"))
     return _cut_all(envelope, groove, cuts)
 
 
@@ -437,8 +466,7 @@ def distal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     )
     groove = None
     if with_groove:
-        e = d.groove_width + 1.0
-        groove = helical_groove(d.outer_diameter, d.groove("distal"), -e, d.distal_length + e)
+        groove = helical_groove(d.outer_diameter, d.groove("distal"), *d.groove_span("distal"))
     cz = d.chamber_z
     cuts = [
         cylinder(d.seat_diameter, -1.0, d.pocket_depth_distal),

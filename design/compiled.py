@@ -8,6 +8,8 @@ virtual machine evaluates the same function (about 15x slower), with a warning.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import os
 import shutil
@@ -15,7 +17,7 @@ import subprocess
 import tempfile
 import threading
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import casadi as ca
@@ -70,10 +72,27 @@ def compile_functions(functions: list[ca.Function]) -> list[ca.Function]:
     key = f"{name}_{digest[:20]}"
     if key not in _loaded:
         target = cache_dir() / f"{key}.so"
-        if not target.exists() and not _build(cc, name, key, source, target):
-            return list(functions)
+        if not target.exists():
+            with _building(target):
+                # Another process may have built it while this one waited.
+                if not target.exists() and not _build(cc, name, key, source, target):
+                    return list(functions)
         _loaded[key] = [ca.external(f.name(), str(target)) for f in functions]
     return _loaded[key]
+
+
+@contextlib.contextmanager
+def _building(target: Path) -> Iterator[None]:
+    """Hold the lock on building ``target``: processes that need the same model at once
+    (the test workers, a study's Dask workers) compile it once, the others wait for it
+    instead of compiling it too. Where the file system has no locks, build anyway."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target.with_suffix(".lock"), "a") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        except OSError:
+            pass
+        yield
 
 
 def _build(cc: str, name: str, key: str, source: str, target: Path) -> bool:

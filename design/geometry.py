@@ -21,20 +21,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from design.units import MM
-
 SMOOTH = 1e-12
 """Floor under square roots of squared lengths, keeping them differentiable at zero. [m]"""
-WIRE_CLEARANCE = 0.05 * MM
-"""Least diametral clearance of a ring's bore over the wire. [m]
-
-The wire turns inside the proximal ring (the wire turns the distal ring, the catheter the
-proximal one), so the bore is a running fit; catalogue NdFeB rings hold their diameters to
-about +-0.05 mm, so a bore drawn 0.05 mm over the wire still passes it at the bore's lower
-limit. Studies may ask for more (``wire_clearance_mm``), never less."""
-FIT_TOLERANCE = 1e-9
-"""A bore short of its clearance by less than this still fits: the NLP's feasibility
-tolerance (1e-6 mm), far below any machining, so that an optimum on the bound loads. [m]"""
 
 
 def is_symbolic(*values: Any) -> bool:
@@ -261,14 +249,6 @@ def disc_radius(loop: Any) -> Any:
     if loop.shape[0] < 3 or winding_number(loop) == 0:
         return 0.0
     return float(segment_distances(loop).min())
-
-
-def ring_clears_wire(
-    magnet_inner_diameter: float, wire_outer_diameter: float, clearance: float = WIRE_CLEARANCE
-) -> bool:
-    """Whether the ring's bore clears the wire by ``clearance`` (:data:`WIRE_CLEARANCE`),
-    within :data:`FIT_TOLERANCE` (diameters and clearance in m)."""
-    return magnet_inner_diameter - wire_outer_diameter >= clearance - FIT_TOLERANCE
 
 
 def ring_radius(outer_diameter: Any, length: Any) -> Any:

@@ -7,7 +7,10 @@ killed outright (``kill -9``) leaves no worker behind. Elsewhere it is a no-op.
 
 :class:`Interrupted` is what Ctrl-C (SIGINT) and SIGTERM raise once
 :func:`raise_on_signals` is installed: a ``BaseException`` (like ``KeyboardInterrupt``),
-so no ``except Exception`` takes it for a failure, with the signal's number.
+so no ``except Exception`` takes it for a failure, with the signal's number. A library
+that catches it where its own C++ code calls back into Python (CasADi's IPOPT interface
+turns it into a warning and a stopped solve) would swallow it: the signal is also recorded,
+and :func:`raise_if_interrupted` raises it again after such a call.
 """
 
 from __future__ import annotations
@@ -46,17 +49,28 @@ class Interrupted(BaseException):  # noqa: N818 - named as what happened, like K
         self.signum = signum
 
 
+_seen: list[int] = []
+"""The signal :func:`raise_on_signals`' handler took, once one arrived."""
+
+
+def raise_if_interrupted() -> None:
+    """Raise :class:`Interrupted` again if a signal arrived (after a call into a library
+    that may have caught the first one); nothing otherwise."""
+    if _seen:
+        raise Interrupted(_seen[0])
+
+
 def raise_on_signals(on_second: int = 130) -> None:
     """From now on SIGINT and SIGTERM raise :class:`Interrupted` in the main thread (a
     signal ignored when the process started, as ``nohup`` or a shell's ``&`` do, stays
     ignored); a second signal while the first is handled ends the process at once (exit
     ``on_second``)."""
-    seen: list[int] = []
+    _seen.clear()
 
     def handler(signum: int, frame: FrameType | None) -> None:
-        if seen:
+        if _seen:
             os._exit(on_second)
-        seen.append(signum)
+        _seen.append(signum)
         raise Interrupted(signum)
 
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -64,4 +78,4 @@ def raise_on_signals(on_second: int = 130) -> None:
             signal.signal(sig, handler)
 
 
-__all__ = ["Interrupted", "die_with_parent", "raise_on_signals"]
+__all__ = ["Interrupted", "die_with_parent", "raise_if_interrupted", "raise_on_signals"]

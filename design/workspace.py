@@ -109,6 +109,17 @@ class Workspace:
         return int(np.count_nonzero(self.grid.multistable))
 
 
+class NoWorkspace(ValueError):
+    """A design whose sweep has nothing to measure: no grid configuration has a stable
+    state, or the robot has no home. The message says which and why."""
+
+
+def _common_failure(eq: Equilibria) -> str:
+    """The most frequent reason in ``eq.failure`` of the rows without a state."""
+    reasons = [str(r) for r in eq.failure[~eq.stable] if r]
+    return max(set(reasons), key=reasons.count) if reasons else "no reason recorded"
+
+
 def _loop_radius(loop: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Radius of a star-shaped closed loop (S, 2) around the origin in polar ``angles``."""
     phi = np.arctan2(loop[:, 1], loop[:, 0])
@@ -120,13 +131,17 @@ def _loop_radius(loop: np.ndarray, angles: np.ndarray) -> np.ndarray:
 def workspace_metrics(
     grid: Equilibria, parallel: Equilibria, antiparallel: Equilibria, home: Home
 ) -> Workspace:
-    """Measure a swept workspace about ``home`` (module docstring for the definitions)."""
+    """Measure a swept workspace about ``home`` (module docstring for the definitions);
+    :class:`NoWorkspace` where there is nothing to measure."""
     rest_position = home.straight
     reach = grid.position[grid.stable] - rest_position
     if reach.shape[0] == 0:
-        raise ValueError("no configuration of the grid reached a stable equilibrium")
+        raise NoWorkspace(
+            f"none of the {len(grid)} configurations of the grid has a stable state (most "
+            f"often: {_common_failure(grid)})"
+        )
     if not np.isfinite(home.position).all():
-        raise ValueError(f"the robot has no home state: {home.state.failure[0]}")
+        raise NoWorkspace(f"the robot has no home state: {home.state.failure[0]}")
     dist = np.linalg.norm(reach, axis=1)
     # Ties (an axisymmetric set-up) resolve to the first grid configuration, not to noise.
     i = int(np.flatnonzero(dist >= dist.max() * (1 - 1e-9))[0])

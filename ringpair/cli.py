@@ -29,7 +29,7 @@ if __name__ == "__main__" or Path(sys.argv[0]).name == "ringpair":  # the comman
 
 import click  # the imports below take seconds: after the early handler
 
-from design.processes import Interrupted, raise_on_signals
+from design.processes import Interrupted, raise_if_interrupted, raise_on_signals
 from ringpair.commands.branch import branch
 from ringpair.commands.cad import cad
 from ringpair.commands.calibrate import calibrate
@@ -104,7 +104,10 @@ def main() -> None:
     warnings.showwarning = _show_warning
     raise_on_signals()
     try:
-        cli.main(standalone_mode=True)
+        try:
+            cli.main(standalone_mode=True)
+        finally:
+            raise_if_interrupted()  # a signal a library swallowed still ends the run so
     except (Interrupted, KeyboardInterrupt):
         _quiet()
         err_console.print("interrupted")

@@ -7,14 +7,15 @@ rerun with the same inputs (:func:`inputs_key`) reuses it):
 1. ``baseline``: workspace of the starting design (the study's model);
 2. ``optimise``: the study's NLP (:func:`optimize.sizing.nlp.optimize_design`);
    ``sensitivity``: what each limit holding the optimum costs (:func:`sensitivity`: the
-   NLP solved again with that one limit moved by :data:`RELAX`);
+   NLP solved again with that one limit moved by
+   :data:`optimize.sizing.limit_costs.RELAX`);
 3. ``pareto``: the Pareto sweeps on Dask (:func:`optimize.sizing.pareto.run_sweeps`);
 4. ``forward``: the starting and the chosen design re-simulated with the model for design
    work (:data:`design.model.DEFAULT_EFFECTS`, the printed tip included:
    :func:`forward_model`);
-5. ``tolerance``: Monte Carlo over manufacturing tolerances (:data:`TOLERANCES`), the
-   spread of the chosen design's disc radius (one batch solve of every sample's
-   parallel-ring loop);
+5. ``tolerance``: Monte Carlo over manufacturing tolerances
+   (:func:`design.tolerances.tolerance_spread`), the spread of the chosen design's disc
+   radius (one batch solve of every sample's parallel-ring loop);
 6. ``effects``: how far each model effect moves the chosen design's tip;
 7. ``cad``: parts, checks and renders of the chosen design (:func:`cad.build_parts`);
 0. ``diagnosis``: of measured data, when given; it runs first, and every later stage
@@ -46,16 +47,15 @@ import numpy as np
 from design import stored
 from design.atomic import write_text
 from design.designfile import save_design
-from design.equilibrium import solve_equilibria
-from design.geometry import curve_disc_radius
-from design.home import HOME_COMMAND
 from design.made import made_design
 from design.model import DEFAULT_EFFECTS, RingPairModel
 from design.records import Design
-from design.registry import PARAMETERS, file_key, index
+from design.registry import PARAMETERS
+from design.tolerances import TOLERANCE_LOOP, TOLERANCES, tolerance_spread
 from design.units import MM
-from design.workspace import Workspace, angle_grid, sweep_workspace
-from optimize.sizing.studyfile import FREE_KEYS, Bound, Study
+from design.workspace import Workspace, sweep_workspace
+from optimize.sizing.limit_costs import RELAX, limit_costs
+from optimize.sizing.studyfile import Study
 from ringpair.report_notes import rounding_note
 from ringpair.runs import inputs_key, sha256, stage_path, stored_stage, tree_hash
 from ringpair.tables import effect_shifts, objective_in_report_units, write_pareto_csvs
@@ -63,42 +63,9 @@ from ringpair.tables import effect_shifts, objective_in_report_units, write_pare
 if TYPE_CHECKING:
     from optimize.sizing.nlp import OptimizationResult
 
-TOLERANCES = {n: p.tolerance for n, p in PARAMETERS.items() if p.tolerance is not None}
-"""Manufacturing and placement tolerances of the Monte Carlo (one sigma), parameter ->
-('rel', fraction) or ('abs', SI value), from :mod:`design.registry`: grade spread of NdFeB
-remanence (2 %), ground-magnet dimensions (+-0.02 mm), extruded-tube modulus (10 %), NiTi
-wire (5 %), and +-1 mm placement of the external magnet."""
-
 EFFECTS_PATH = np.deg2rad(np.arange(0.0, 181.0, 12.0))
 """theta1 of the effects stage [rad], driven in order with theta2 = 0: the paper's planar
 experiment, as ``ringpair effects`` by default."""
-
-TOLERANCE_LOOP = 120
-"""Parallel-ring loop samples per Monte Carlo sample: the polygon's inscribed disc is then
-within r (1 - cos(pi / 120)) ~ 0.01 mm of the loop's for a 27 mm disc."""
-
-RELAX = 0.1
-"""Step of the sensitivity stage: an active constraint's limit moved by this fraction of
-its value, an active free bound by this fraction of its range (within what the quantity
-admits), each towards a larger design space."""
-
-CONSTRAINT_LIMITS = {
-    "twist.wire": ("twist_limit", 1),
-    "twist.catheter": ("twist_limit", 1),
-    "neutral": ("neutral_tolerance", 1),
-    "magnet_clearance": ("magnet_clearance", -1),
-    "ring_wall": ("min_wall", -1),
-    "catheter_wall": ("min_wall", -1),
-    "ring_on_wire": ("wire_clearance", -1),
-    "wire_in_catheter": ("wire_clearance", -1),
-    "ring_seat": ("wire_clearance", -1),
-    "ring_diameter": ("max_outer_diameter", 1),
-    "catheter_diameter": ("max_outer_diameter", 1),
-    "strain.catheter": ("catheter_max_strain", 1),
-    "strain.wire": ("wire_max_strain", 1),
-}
-"""Constraint group of the NLP -> (the study's limit that sets it, :class:`Constraints`
-field; +1 where raising the limit relaxes it, -1 where lowering it does)."""
 
 BEST_DESIGN = "best_design.toml"
 """The recommended design's file, in the study's output folder."""
@@ -180,127 +147,16 @@ def _stage(
     return result
 
 
-def tolerance_spread(
-    design: Design, samples: int, seed: int, model: RingPairModel
-) -> dict[str, Any]:
-    """The disc about home (the workspace's, :func:`design.geometry.curve_disc_radius` on
-    TOLERANCE_LOOP samples) of ``samples`` perturbed copies of ``design`` [m] (TOLERANCES,
-    seeded); NaN for a copy without a home state."""
-    rng = np.random.default_rng(seed)
-    base = model.parameters(design)
-    params = np.repeat(base[:, None], samples, axis=1)
-    for name, (kind, sigma) in TOLERANCES.items():
-        noise = rng.normal(0.0, sigma, samples)
-        i = index(name)
-        params[i] = params[i] * (1 + noise) if kind == "rel" else params[i] + noise
-    loop = angle_grid(2 * np.pi / TOLERANCE_LOOP)
-    theta = np.tile(loop, samples)
-    eq = solve_equilibria(model, np.repeat(params, len(loop), axis=1), theta, theta)
-    home = solve_equilibria(
-        model, params, np.full(samples, HOME_COMMAND[0]), np.full(samples, HOME_COMMAND[1])
-    )
-    radii = []
-    for k in range(samples):
-        rows = slice(k * len(loop), (k + 1) * len(loop))
-        ok = eq.stable[rows]
-        about = (eq.position[rows][ok] - home.position[k])[:, 1:]
-        radii.append(curve_disc_radius(about) if home.stable[k] else float("nan"))
-    return {"disc_radius": np.array(radii), "samples": samples, "seed": seed}
-
-
 def sensitivity(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
-    """What each limit holding the optimum costs: the study's NLP solved again, from the
-    optimum and with its materials, with that one limit moved by :data:`RELAX`.
-
-    One row per limit (constraint groups that share a limit, as the two twist limits do,
-    in one row): ``limit`` (a :class:`Constraints` field or ``bound.<name>.low/high``),
-    ``groups`` (the active items it covers), ``meaning``, ``unit``, ``old`` and ``new``
-    (file units), ``multiplier`` (the largest |Lagrange multiplier| of its groups, scaled
-    problem; NaN for a bound, whose multiplier the result does not keep), ``objective``
-    (the objective so re-solved, report units; NaN when that NLP found no design) and
-    ``gain`` (its change against the optimum, report units). Largest gain first.
-    """
-    from optimize.sizing.nlp import optimize_design
-
-    cat, wire = best.materials
-    fixed = replace(
-        study,
-        catheter_materials=(cat,) if cat and study.catheter_materials else (),
-        wire_materials=(wire,) if wire and study.wire_materials else (),
-    )
-    limits: dict[str, list[str]] = {}
-    for item in best.active:
-        name = item if item.startswith("bound.") else CONSTRAINT_LIMITS.get(item, ("", 0))[0]
-        if name:
-            limits.setdefault(name, []).append(item)
-    multipliers = {c.name: c.multiplier for c in best.constraints}
+    """What each limit holding the optimum costs
+    (:func:`optimize.sizing.limit_costs.limit_costs`), its ``objective`` and ``gain`` in
+    report units (:func:`ringpair.tables.objective_in_report_units`). Largest gain first."""
     start = objective_in_report_units(study, best.objective)
     rows = []
-    for limit, groups in limits.items():
-        moved = _moved(fixed, limit, groups)
-        if moved is None:
-            continue
-        relaxed, row = moved
-        result = optimize_design(relaxed, starts=[best.values])
-        objective = (
-            objective_in_report_units(study, result.objective) if result.feasible else np.nan
-        )
-        mult = [multipliers[g] for g in groups if g in multipliers]
-        rows.append(
-            row
-            | {
-                "limit": limit,
-                "groups": groups,
-                "multiplier": max(mult) if mult else np.nan,
-                "objective": objective,
-                "gain": objective - start,
-            }
-        )
+    for row in limit_costs(study, best):
+        objective = objective_in_report_units(study, row["objective"])
+        rows.append(row | {"objective": objective, "gain": objective - start})
     return sorted(rows, key=lambda r: -np.nan_to_num(r["gain"], nan=-np.inf))
-
-
-def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str, Any]] | None:
-    """``study`` with ``limit`` moved by RELAX towards a larger design space, and what moved
-    (meaning, unit, old and new value in file units); None where it cannot move."""
-    from optimize.sizing.nlp_problem import GROUPS
-
-    if limit.startswith("bound."):
-        _, name, side = limit.split(".")
-        b = study.bound(name)
-        key = next(k for k in FREE_KEYS.values() if k.name == name)
-        if b is None:
-            return None
-        step = RELAX * (b.high - b.low)
-        if side == "low":
-            floor = key.low * key.scale
-            low = b.low - step if b.low - step > floor else (b.low + floor) / 2
-            low = low if key.low_open else max(low, floor)
-            new = Bound(name, low, b.high)
-        else:
-            new = Bound(name, b.low, min(b.high + step, key.high * key.scale))
-        old_v, new_v = (b.low, new.low) if side == "low" else (b.high, new.high)
-        if new_v == old_v:
-            return None
-        free = tuple(new if f.name == name else f for f in study.free)
-        unit = file_key(name).rsplit("_", 1)[-1] if name in PARAMETERS else "mm"
-        meaning = f"the {'lower' if side == 'low' else 'upper'} bound of the {key.meaning}"
-        what = {
-            "meaning": meaning,
-            "unit": unit,
-            "old": old_v / key.scale,
-            "new": new_v / key.scale,
-        }
-        return replace(study, free=free), what
-    field_name, sign = CONSTRAINT_LIMITS[groups[0]]
-    old = getattr(study.limits, field_name)
-    if old is None:
-        return None
-    scale, unit, _ = GROUPS[groups[0]]
-    new_limit = old * (1 + sign * RELAX)
-    constraints = replace(study.limits, **{field_name: new_limit})
-    meaning = "the limit on the " + " and the ".join(GROUPS[g][2] for g in groups)
-    what = {"meaning": meaning, "unit": unit, "old": old / scale, "new": new_limit / scale}
-    return replace(study, constraints=constraints), what
 
 
 @lru_cache(maxsize=1)
@@ -644,6 +500,7 @@ def write_manifest(
 
 __all__ = [
     "BEST_DESIGN",
+    "TOLERANCE_LOOP",
     "TOLERANCES",
     "Run",
     "StageError",
@@ -651,5 +508,7 @@ __all__ = [
     "Workspace",
     "headline",
     "run_study",
+    "sensitivity",
+    "tolerance_spread",
     "write_manifest",
 ]

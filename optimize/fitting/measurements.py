@@ -323,11 +323,16 @@ def _integer(where: str, column: str, cell: str) -> int:
         raise MeasurementError(
             f"{where}, column {column}: expected a non-negative integer; found {cell!r}"
         ) from None
-    if value < 0:
+    if not 0 <= value <= MAX_SEQUENCE:
         raise MeasurementError(
-            f"{where}, column {column}: expected a non-negative integer; found {cell}"
+            f"{where}, column {column}: expected a non-negative integer up to "
+            f"{MAX_SEQUENCE:,} (2^63 - 1); found {cell}"
         )
     return value
+
+
+MAX_SEQUENCE = 2**63 - 1
+"""Largest acquisition number a data set may give: what the int64 ``sequence`` holds."""
 
 
 def _check_duplicates(

@@ -21,8 +21,9 @@ import math
 
 import numpy as np
 
+from design.admissible import WIRE_CLEARANCE
 from design.designfile import DesignError, default_design, design_from_dict, design_to_dict
-from design.geometry import WIRE_CLEARANCE, cylinder_distance, rest_position
+from design.geometry import cylinder_distance, rest_position
 from design.records import Design
 from design.units import MM
 

@@ -11,6 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from design.admissible import RULES
 from design.geometry import external_distance, magnet_centre_at
 from design.records import Design
 from design.registry import design_with, index, parameter_vector
@@ -114,12 +115,12 @@ def group_bounds(
         "neutral": (-inf, lim.neutral_tolerance),
         "magnet_clearance": (lim.magnet_clearance, inf),
         "ring_stiffness": (RING_STIFFNESS_MARGIN, inf),
-        "ring_on_wire": (lim.wire_clearance, inf),
-        "wire_in_catheter": (lim.wire_clearance, inf),
-        "ring_wall": (lim.min_wall, inf),
-        "catheter_wall": (lim.min_wall, inf),
+        "ring_on_wire": (RULES["ring_on_wire"].bound(lim), inf),
+        "wire_in_catheter": (RULES["wire_in_catheter"].bound(lim), inf),
+        "ring_wall": (RULES["ring_wall"].bound(lim), inf),
+        "catheter_wall": (RULES["catheter_wall"].bound(lim), inf),
         "ring_diameter": (-inf, lim.max_outer_diameter),
-        "ring_seat": (lim.wire_clearance, inf),
+        "ring_seat": (RULES["ring_seat"].bound(lim), inf),
         "catheter_diameter": (-inf, lim.max_outer_diameter),
         "epsilon.catheter_outer_diameter": (-inf, inf),
         "epsilon.external_distance": (-inf, inf),

@@ -33,10 +33,11 @@ Formulation (one material combination, one start):
   with ``torsion`` the rings' rotational stiffness (:func:`ring_stiffness`: a stop counts
   by how hard it is pressed, so a free pre-twist presses the rings against it); rings on
   the wire and the wire in the catheter with clearance (at least
-  :data:`design.geometry.WIRE_CLEARANCE`), and the ring bore over the printed pieces' wire
-  bore and passage (``ring_seat``); walls; the largest outer diameter (the printed tip's
-  and the catheter's; the printed pieces' rows whatever the model: the study builds
-  them); clearance
+  :data:`design.admissible.WIRE_CLEARANCE`), and the ring bore over the printed pieces' wire
+  bore and passage (``ring_seat``); walls (these five: the margins of
+  :mod:`design.admissible`, bounded by :meth:`~design.admissible.Rule.bound`); the largest
+  outer diameter (the printed tip's and the catheter's; the printed pieces' rows whatever
+  the model: the study builds them); clearance
   of both rings to the external magnet at every configuration (the model's
   :func:`design.geometry.ring_clearance`: true distance to the cylinder less the ring's
   bounding sphere); the neutral deflection within tolerance (each antiparallel tip's
@@ -64,6 +65,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from design.admissible import RULES
 from design.compiled import compile_functions
 from design.geometry import (
     curve_disc_radius,
@@ -122,12 +124,12 @@ GROUPS: dict[str, tuple[float, str, str]] = {
     "neutral": (MM, "mm", "tip deflection with antiparallel rings"),
     "magnet_clearance": (MM, "mm", "rings to the external magnet's surface"),
     "ring_stiffness": (1.0, "-", "rings' rotational stiffness over the transmissions'"),
-    "ring_on_wire": (MM, "mm", "ring bore minus wire OD"),
-    "wire_in_catheter": (MM, "mm", "catheter bore minus wire OD"),
-    "ring_wall": (MM, "mm", "radial wall of the rings"),
-    "catheter_wall": (MM, "mm", "radial wall of the catheter"),
+    "ring_on_wire": (MM, "mm", RULES["ring_on_wire"].meaning),
+    "wire_in_catheter": (MM, "mm", RULES["wire_in_catheter"].meaning),
+    "ring_wall": (MM, "mm", RULES["ring_wall"].meaning),
+    "catheter_wall": (MM, "mm", RULES["catheter_wall"].meaning),
     "ring_diameter": (MM, "mm", "outer diameter of the printed tip"),
-    "ring_seat": (MM, "mm", "ring bore minus the printed pieces' wire bore and passage"),
+    "ring_seat": (MM, "mm", RULES["ring_seat"].meaning),
     "catheter_diameter": (MM, "mm", "catheter outer diameter"),
     "epsilon.catheter_outer_diameter": (MM, "mm", "catheter OD (Pareto bound)"),
     "epsilon.external_distance": (MM, "mm", "external magnet distance (Pareto bound)"),
@@ -333,22 +335,19 @@ def _design_rows() -> tuple[tuple[str, ...], ca.Function]:
     whatever model the study designs with: the study builds those pieces."""
     prm = ca.SX.sym("params", len(NAMES))
     s = Symbols(prm)
-    wire = s["wire_outer_diameter"]
+    q = dict(s) | {"wire_bore": s.tip.wire_bore}
     volume = 2 * ring_volume(
         s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
     )
     distance = external_distance(s["free_length"], s.external_center)
-    rows = [
-        ("ring_on_wire", s["magnet_inner_diameter"] - wire),
-        ("wire_in_catheter", s["catheter_inner_diameter"] - wire),
-        ("ring_wall", (s["magnet_outer_diameter"] - s["magnet_inner_diameter"]) / 2),
-        ("catheter_wall", (s["catheter_outer_diameter"] - s["catheter_inner_diameter"]) / 2),
+    admissible = ("ring_on_wire", "wire_in_catheter", "ring_wall", "catheter_wall")
+    rows = [(name, RULES[name].margin(q)) for name in admissible]
+    rows += [
         ("ring_diameter", s.tip.outer_diameter),
         ("catheter_diameter", s["catheter_outer_diameter"]),
     ]
     # the rings rest on the pieces' pocket floors (cad.mounting refuses anything else)
-    seat = s["magnet_inner_diameter"] - ca.fmax(s.tip.wire_bore, s["catheter_inner_diameter"])
-    rows.append(("ring_seat", seat))
+    rows.append(("ring_seat", RULES["ring_seat"].margin(q)))
     rows += [
         ("epsilon.catheter_outer_diameter", s["catheter_outer_diameter"]),
         ("epsilon.external_distance", distance),

@@ -47,7 +47,7 @@ wire = ["niti"]                           # absent: the tube keeps the base desi
 max_outer_diameter_mm = 4.0               # printed tip and catheter; default: the base's
                                           # largest outer diameter
 wire_clearance_mm = 0.05                  # ring bore and catheter bore >= wire OD + this
-                                          # (0.05 at least: design.geometry.WIRE_CLEARANCE)
+                                          # (0.05 at least: design.admissible.WIRE_CLEARANCE)
 min_wall_mm = 0.1                         # radial wall of rings and catheter
 magnet_clearance_mm = 5.0                 # tip rings to the external magnet's surface, at
                                           # every sampled configuration
@@ -94,8 +94,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from design.admissible import WIRE_CLEARANCE
 from design.designfile import DesignError, default_design, load_design, read_input
-from design.geometry import WIRE_CLEARANCE
 from design.model import DEFAULT_EFFECTS, EFFECTS, PRINTED_TIP
 from design.mounting import design_tip_geometry
 from design.records import Design

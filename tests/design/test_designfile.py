@@ -19,6 +19,7 @@ from design.designfile import (
     loads_design,
     save_design,
 )
+from design.mounting import design_tip_geometry
 
 
 def test_demonstrator_matches_the_paper_in_si(demonstrator):
@@ -91,13 +92,30 @@ def test_nearly_unit_magnetization_is_normalised(demonstrator_doc):
 
 @pytest.mark.parametrize(("bore_mm", "fits"), [(0.45, True), (0.449, False), (0.4, False)])
 def test_ring_bore_must_clear_the_wire_by_the_running_clearance(demonstrator_doc, bore_mm, fits):
-    # The demonstrator's wire is 0.4 mm; the bore needs design.geometry.WIRE_CLEARANCE more.
+    # The demonstrator's wire is 0.4 mm; the bore needs design.admissible.WIRE_CLEARANCE more.
     doc = edited(demonstrator_doc, "tip.magnet_inner_diameter_mm", bore_mm)
     if fits:
         assert design_from_dict(doc).tip.magnet_inner_diameter == pytest.approx(0.45e-3)
         return
     with pytest.raises(DesignError, match=r"robot.wire.outer_diameter_mm \(0.4\) plus 0.05"):
         design_from_dict(doc)
+
+
+@pytest.mark.parametrize("process", ["resin", "fdm"])
+def test_free_length_must_leave_a_rod_under_the_printed_tip(demonstrator_doc, process):
+    # The flexible rod ends where the catheter enters the proximal piece, the rigid offset
+    # before the tracked point (design.mounting): a shorter free length has no rod at all.
+    doc = edited(demonstrator_doc, "tip.mounting", {"process": process})
+    offset_mm = design_tip_geometry(design_from_dict(doc)).rigid_offset * 1e3
+    assert 1.0 < offset_mm < 150.0
+    longer = design_from_dict(edited(doc, "robot.free_length_mm", offset_mm * 1.01))
+    assert longer.robot.free_length == pytest.approx(offset_mm * 1.01e-3)
+    for short in (offset_mm * 0.99, offset_mm):
+        with pytest.raises(DesignError) as refused:
+            design_from_dict(edited(doc, "robot.free_length_mm", short))
+        message = str(refused.value)
+        assert f"rigid offset ({offset_mm:.4g} mm" in message
+        assert message.startswith("robot.free_length_mm") and f"got {short:g}" in message
 
 
 def test_default_design_is_a_fresh_parse():

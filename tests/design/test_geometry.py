@@ -1,8 +1,8 @@
 """Geometry of the set-up (design.geometry) against closed forms: the distance to a solid
 cylinder, the ring centres and their spacing, the external magnet's distance from the rest
-tip, the rings' clearance to the magnet, the bore's fit over the wire and the workspace
-loop's disc radius; numpy and CasADi branches alike, on set-ups from the whole design
-space (tests/support/setups.py). The seed of each random case is in its test id."""
+tip, the rings' clearance to the magnet and the workspace loop's disc radius; numpy and
+CasADi branches alike, on set-ups from the whole design space (tests/support/setups.py).
+The seed of each random case is in its test id."""
 
 from __future__ import annotations
 
@@ -12,9 +12,7 @@ import pytest
 from setups import random_design
 
 from design.geometry import (
-    FIT_TOLERANCE,
     SMOOTH,
-    WIRE_CLEARANCE,
     cylinder_distance,
     disc_radius,
     external_distance,
@@ -23,7 +21,6 @@ from design.geometry import (
     rest_position,
     ring_centres,
     ring_clearance,
-    ring_clears_wire,
     ring_radius,
     segment_distances,
     winding_number,
@@ -273,20 +270,6 @@ def test_ring_radius_is_the_distance_to_the_rim_corners(seed):
     assert ring_radius(od, length) == pytest.approx(farthest, rel=1e-14), f"seed {seed}"
     symbolic = evaluate(ring_radius, [ca.SX.sym("od"), ca.SX.sym("h")], [od, length])[0]
     assert symbolic[0] == pytest.approx(farthest, rel=1e-14), f"seed {seed}"
-
-
-# --- bore over the wire: inner diameter - wire diameter >= clearance, within FIT_TOLERANCE.
-
-
-@pytest.mark.parametrize("clearance", [WIRE_CLEARANCE, 0.2 * MM])
-@pytest.mark.parametrize("wire", [0.2 * MM, 0.4 * MM, 1.0 * MM])
-def test_ring_clears_wire_exactly_at_the_clearance_and_not_a_micrometre_below(wire, clearance):
-    assert ring_clears_wire(wire + clearance, wire, clearance)
-    assert ring_clears_wire(wire + clearance - FIT_TOLERANCE / 2, wire, clearance)
-    assert not ring_clears_wire(wire + clearance - 1e-6, wire, clearance)
-    if clearance == WIRE_CLEARANCE:  # the default
-        assert ring_clears_wire(wire + clearance, wire)
-        assert not ring_clears_wire(wire + clearance - 1e-6, wire)
 
 
 # --- disc radius of the workspace loop (moved from test_workspace.py).

@@ -86,8 +86,13 @@ def test_stale_outputs_of_an_earlier_run_are_removed_and_only_those(tmp_path, ru
 
 @pytest.mark.slow
 def test_an_interrupted_run_is_seen_by_the_next_run_and_its_manifest(tmp_path, study):
+    # The interrupted run is a feasible study (its workspace, parts and report take far
+    # longer than the infeasible one's seconds, which could end before the signal lands).
+    feasible = tmp_path / "feasible.toml"
+    feasible.write_text(SMALL)
+    first = [sys.executable, "-m", "ringpair.cli", "study", str(feasible), "--out", "out"]
     args = [sys.executable, "-m", "ringpair.cli", "study", str(study), "--out", "out"]
-    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(first, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     t0 = time.monotonic()
     while not (tmp_path / "out" / RUNNING).exists():
         assert time.monotonic() - t0 < 120 and proc.poll() is None

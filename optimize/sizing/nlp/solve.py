@@ -10,7 +10,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from design.geometry import ring_clears_wire
+from design.admissible import admits, quantities
+from design.processes import raise_if_interrupted
 from design.registry import NAMES
 from optimize.sizing.materials import Material, material
 from optimize.sizing.nlp.branches import _loop_faults, _off_branch
@@ -64,15 +65,9 @@ def _start_points(study: Study, count: int) -> list[np.ndarray]:
         for _ in range(100):
             z = lo + (hi - lo) * rng.random(len(lo))
             vals = dict(zip(names, z, strict=True))
-            d = candidate_design(study, vals)
-            ok = (
-                d.tip.magnet_inner_diameter < d.tip.magnet_outer_diameter
-                and d.robot.catheter.inner_diameter < d.robot.catheter.outer_diameter
-                and d.robot.wire.outer_diameter < d.robot.catheter.inner_diameter
-                and ring_clears_wire(
-                    d.tip.magnet_inner_diameter, d.robot.wire.outer_diameter, clearance
-                )
-            )
+            q = quantities(candidate_design(study, vals))
+            ok = all(admits(r, q) for r in ("ring_wall", "catheter_wall", "wire_in_catheter"))
+            ok = ok and admits("ring_on_wire", q, clearance)
             if ok:
                 break
         out.append(z)
@@ -177,6 +172,7 @@ def _solve_one(
     p = params[: len(NAMES)]
     for attempt in range(2):
         sol = prob.solver(x0=w0, p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        raise_if_interrupted()  # IPOPT's interface stops the solve on Ctrl-C, and goes on
         stats = prob.solver.stats()
         w = np.asarray(sol["x"]).ravel()
         v = lo + (hi - lo) * np.clip(w[:nf], 0.0, 1.0)
@@ -272,6 +268,7 @@ def _conflicts(
         [np.ones(nf), np.full(n * k_all, np.inf), [np.inf, 1.0], np.full(n_s, np.inf)]
     )
     sol = solver(x0=w0, p=params, lbx=lbx, ubx=ubx, lbg=lbg2, ubg=ubg2)
+    raise_if_interrupted()
     if not solver.stats().get("success", False):
         raise RuntimeError(f"minimum-violation problem: {solver.stats().get('return_status')}")
     w = np.asarray(sol["x"]).ravel()

@@ -13,10 +13,11 @@ import pytest
 import tomli_w
 from setups import random_design
 
+from design.admissible import WIRE_CLEARANCE
 from design.controllable import steerable
 from design.designfile import design_to_dict
 from design.equilibrium import solve_sequence
-from design.geometry import WIRE_CLEARANCE, curve_disc_radius, external_distance
+from design.geometry import curve_disc_radius, external_distance
 from design.home import solve_home
 from design.model import RingPairModel
 from design.process import RESIN

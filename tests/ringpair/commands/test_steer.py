@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import tomli_w
 
 from design.equilibrium import solve_design
 from design.home import solve_home
@@ -143,3 +144,20 @@ def test_steer_largest_ellipse_reports_the_papers_numbers(tmp_path, run):
     assert result.exit_code == 0, result.output
     text = " ".join(result.output.split())
     assert "FOLLOWED" in text and "mm on average; RMS distance to the ellipse fitted" in text
+
+
+def test_steer_path_never_writes_its_plot_over_its_csv_or_an_input(tmp_path, run, demonstrator_doc):
+    # --out p.png wrote the CSV to p.png and then the plot over it (issue 55)
+    png = tmp_path / "p.png"
+    result = run("steer", "--effects", "none", "--path", "circle:2", "--out", str(png))
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert "ending in .csv" in " ".join(result.output.split())
+    assert not png.exists()
+    # the plot beside s.csv is s.png: here the design file, which stays as it was
+    design = tmp_path / "s.png"
+    design.write_text(tomli_w.dumps(demonstrator_doc))
+    before = design.read_text()
+    out = tmp_path / "s.csv"
+    result = run("steer", str(design), "--effects=none", "--path=circle:2", "--out", str(out))
+    assert result.exit_code == 2 and "is an input of this command" in result.output
+    assert design.read_text() == before and not out.exists()
