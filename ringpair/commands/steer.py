@@ -32,6 +32,7 @@ from ringpair.options import (
     MAX_CONFIGS,
     FloatRange,
     UserError,
+    check_request,
     console,
     default_out,
     design_from,
@@ -44,9 +45,11 @@ from ringpair.plots import plot_path
 from ringpair.pressing import PRESS_STEP, steer_press
 from ringpair.tables import write_csv
 
-MAX_TARGETS = 100_000
-"""Targets per run at most (about a minute with the baseline model, far more with the
-model for design work)."""
+TARGET_SECONDS = 0.1
+"""Time one target takes with the model for design work (its seed grid aside): 2000
+targets took 209 s and 200 took 28 s on the development machine (2 cores, shared). [s]"""
+MAX_TARGETS = 3_000
+"""Targets per run unless --max-targets says more: about five minutes at TARGET_SECONDS."""
 
 STEER_COLUMNS = (
     "target",
@@ -208,6 +211,14 @@ def steer_rows(result: Steering) -> list[dict]:
     "--path, and its plot beside it as .png; with --path the name must end in .csv).",
 )
 @effects_option("default")
+@click.option(
+    "--max-targets",
+    type=click.IntRange(1, None),
+    default=MAX_TARGETS,
+    show_default=True,
+    help="Refuse more targets than this (about a tenth of a second each with the model for "
+    "design work; the estimate is given); raise it for a long run.",
+)
 @MAX_CONFIGS
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
 def steer_command(
@@ -222,6 +233,7 @@ def steer_command(
     step: float | None,
     out: Path | None,
     effects: str,
+    max_targets: int,
     max_configs: int,
     quiet: bool,
 ) -> None:
@@ -235,7 +247,8 @@ def steer_command(
     how far from snapping) and the tip tangent. A target out of reach gets the closest
     reachable point, flagged reached = false, with its distance. CSV columns: target
     (1-based), target_y_mm, target_z_mm, theta1_deg, theta2_deg, x_mm, y_mm, z_mm, the tip
-    tangent, error_mm, reached, stable, snapped, multistable, fold_margin.
+    tangent, error_mm, reached, stable, snapped, multistable, fold_margin. More than
+    --max-targets targets are refused with an estimate of their time.
 
     A path (--path): one solution per point, chosen for the smallest total ring rotation
     without jumps between solution branches, then driven as the robot is (each state
@@ -277,10 +290,15 @@ def steer_command(
     if not wanted:
         raise UserError("give a target: --to Y,Z (mm), --targets FILE.csv or --path SPEC")
     _within_reach(d, wanted)
-    if len(wanted) > MAX_TARGETS:
-        raise UserError(
-            f"{len(wanted):,} targets; at most {MAX_TARGETS:,} per run (split the file)"
-        )
+    n = len(wanted)
+    check_request(
+        n,
+        max_targets,
+        " and ".join(o for o, given in (("--to", to), ("--targets", targets)) if given),
+        f"{n:,} targets",
+        n * TARGET_SECONDS,
+        "--max-targets",
+    )
     out = output_path(
         out or default_out(d.name, "steer.csv"),
         "--out",
