@@ -50,6 +50,7 @@ from ringpair.angles import parse_angles
 if TYPE_CHECKING:
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.studyfile import Study
+    from ringpair.runs import RunFolder
 
 # Text is printed as written: no emoji codes (rich would print an angle range like 0:abc:5
 # as '0🔤5') and no markup (a design named 'a[/]b' or a path with brackets would break it
@@ -495,3 +496,38 @@ def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements
         if data.is_dir():
             return load_dataset(data)
         return design_from(design), load_measurements(data)
+
+
+@contextmanager
+def held_run(out: Path, command: str, keep: Iterable[str] = ()) -> Iterator[RunFolder]:
+    """A command's run writing the folder ``out`` as one run's
+    (:func:`ringpair.runs.run_folder`), for commands that write a folder without a study's
+    stages (``cad``, ``workspace``): another run in it is refused (UserError naming --out);
+    an interrupted earlier run is warned about; when the run ends whole (normally or by its
+    exit code, e.g. ``cad``'s 3 for a failed check), :func:`ringpair.runs.finish_run`
+    removes the earlier run's outputs that this run did not write again (never under the
+    folders ``keep``) and writes ``manifest.json`` of the files this run wrote. A run that
+    fails in a folder it made, before writing anything, leaves no folder."""
+    from ringpair.runs import LOCK, FolderBusy, finish_run, run_folder
+
+    made = not out.exists()
+    try:
+        with run_folder(out, command) as folder:
+            if folder.interrupted is not None:
+                warn(
+                    f"the previous run into {out} was interrupted; its files are replaced, "
+                    "and those of its that this run does not write again are removed"
+                )
+            try:
+                yield folder
+            except SystemExit:
+                finish_run(folder, keep)
+                raise
+            finish_run(folder, keep)
+    except FolderBusy as exc:
+        raise UserError(f"--out {out}: {exc}") from None
+    except Exception:
+        if made and {p.name for p in out.iterdir()} <= {LOCK}:
+            (out / LOCK).unlink(missing_ok=True)
+            out.rmdir()
+        raise
