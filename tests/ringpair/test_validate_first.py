@@ -43,6 +43,7 @@ def one_message(result, *words):
             ("steer", "--to", "1,1", "--to", "2,2", "--to", "1,2", "--max-targets", "2"),
             ["--to: 3 targets, about", "at most 2 unless --max-targets"],
         ),
+        (("synth", "--set", "free_length=3"), ["--set free_length", "rigid offset", "got 3"]),
     ],
     ids=[
         "study seed -1",
@@ -52,6 +53,7 @@ def one_message(result, *words):
         "effects ,,",
         "samples",
         "steer targets",
+        "synth rod",
     ],
 )
 def test_bad_options_are_one_message(tmp_path, run, monkeypatch, args, words):
