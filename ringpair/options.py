@@ -462,7 +462,23 @@ def study_from(path: Path | None) -> Study:
     from optimize.sizing.studyfile import StudyError, default_study, load_study
 
     with bad_input(StudyError, OSError, UnicodeDecodeError):
-        return default_study() if path is None else load_study(path)
+        study = default_study() if path is None else load_study(path)
+    external_magnet_only(study.base, study.base_source)
+    return study
+
+
+def external_magnet_only(design: Design, source: object) -> None:
+    """UserError (exit 2) where ``design`` (read from ``source``, for the message) has
+    ``[[field.sources]]``: calibration, diagnosis, the study and the design NLP model the
+    ``[external_magnet]`` alone (their parameter vectors are
+    :data:`design.registry.NAMES`); simulate, workspace and steer take the sources."""
+    if design.sources:
+        kinds = ", ".join(s.kind for s in design.sources)
+        raise UserError(
+            f"{source}: [[field.sources]] ({kinds}): calibrate, diagnose, study and optimize "
+            "model the [external_magnet] alone so far; remove the sources for them "
+            "(simulate, workspace and steer take them)"
+        )
 
 
 SCHEDULER_TIMEOUT = 3.0
@@ -516,8 +532,11 @@ def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements
         )
     with bad_input(MeasurementError, DesignError):
         if data.is_dir():
-            return load_dataset(data)
-        return design_from(design), load_measurements(data)
+            found = load_dataset(data)
+        else:
+            found = design_from(design), load_measurements(data)
+    external_magnet_only(found[0], data / "design.toml" if data.is_dir() else design)
+    return found
 
 
 @contextmanager

@@ -18,7 +18,7 @@ from setups import random_design
 
 from design.compiled import compile_function
 from design.designfile import default_design
-from design.equilibrium import solve_equilibria
+from design.equilibrium import solve_design
 from design.model import CLASSIC, field_model, layout_of, model_for
 from design.model.symbols import Symbols
 from design.records import Design, Source
@@ -34,8 +34,9 @@ def solve(design: Design, effects, commands: np.ndarray):
     """The solver's states at ``commands`` (k, 2), the model evaluated in CasADi's virtual
     machine (tests/support/interpreted.py: these layouts' models would take minutes to
     compile for a few solves)."""
-    model = interpreted(model_for(frozenset(effects)).for_design(design))
-    return solve_equilibria(model, model.parameters(design), commands[:, 0], commands[:, 1])
+    interpreted(model_for(frozenset(effects)).for_design(design))
+    # (solve_design takes the model for the design's field itself, as the commands do)
+    return solve_design(design, commands[:, 0], commands[:, 1], model_for(frozenset(effects)))
 
 
 def in_field(design: Design, *sources: Source, external: bool = False) -> Design:
