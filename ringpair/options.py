@@ -222,6 +222,27 @@ NAME_BYTES = 200
 the temporary beside it adds a few dozen). [bytes]"""
 
 
+def csv_with_picture(
+    out: Path | None, default: Path, mode: str, picture: str, inputs: list
+) -> tuple[Path, Path]:
+    """The checked CSV path (``out`` or ``default``) and the picture written beside it
+    (.png) for ``mode`` (the option that writes both, e.g. ``--path``); ``picture`` says
+    what the picture is. A name not ending in .csv is refused: the picture's name would be
+    the CSV's."""
+    typed = out is not None
+    out = out or default
+    if out.suffix.lower() != ".csv":
+        raise UserError(
+            f"--out {out}: with {mode}, expected a CSV file name ending in .csv ({picture} "
+            f"is written beside it as .png); got {out.suffix or 'no suffix'!r}"
+        )
+    csv_path, png = (
+        output_path(p, "--out", folder=False, typed=typed, inputs=inputs)
+        for p in (out, out.with_suffix(".png"))
+    )
+    return csv_path, png
+
+
 def output_path(
     path: Path,
     option: str,
