@@ -6,10 +6,14 @@ Lengths in millimetres. Every check is one row of a table (list of dicts, writte
 Per printed part, on the STL read back with trimesh:
     watertight      the mesh is closed and consistently oriented;
     volume          mesh volume vs the CAD solid's volume (relative difference);
-    min_wall        smallest wall: inward ray thickness from every triangle's centroid,
-                    area-weighted 1st percentile (ignores knife edges where a cut meets a
-                    face at an acute angle, which have thickness -> 0 but no area), against
-                    the process minimum;
+    min_wall        thinnest wall, absolute (no percentile): the inward ray from every
+                    triangle's centroid across the material to the face it leaves by, where
+                    that face looks away within :data:`KNIFE_ANGLE_DEG` of straight back (a
+                    wall, or a knife edge: a wedge sharper than that angle, e.g. a groove
+                    running out through an end face); a ray that leaves by a face turned
+                    further (the far side of a blunter corner) measures no wall. Against the
+                    process minimum; the teeth are left to their own row (tooth_tip: the
+                    exact tip thickness), the meshes of helicoids being folded slivers;
     build_volume    the part's extent in its print orientation fits the build volume.
 Per assembly:
     interference    for every pair of instances whose boxes overlap, signed distances of
@@ -45,7 +49,10 @@ from cad.solids import cylinder
 from design.atomic import write_text
 
 VOLUME_TOLERANCE = 0.01
-WALL_PERCENTILE = 1.0
+KNIFE_ANGLE_DEG = 60.0
+"""A wedge sharper than this is a knife edge, measured as a wall; a blunter corner (a box's
+90 deg) is no wall: the wall check counts a ray only where the face it leaves by looks
+away from the face it entered by within this angle of straight back. [deg]"""
 INTERFERENCE_TOLERANCE_MM = 0.03
 SAMPLES_PER_MM2 = 0.5
 CENTRE_DISTANCE_TOLERANCE_MM = 1e-3
@@ -82,41 +89,36 @@ def _polydata(vertices: np.ndarray, triangles: np.ndarray) -> pv.PolyData:
 
 
 def wall_thickness(mesh: trimesh.Trimesh, faces: np.ndarray | None = None) -> np.ndarray:
-    """Inward ray thickness from the centroids of ``faces`` (default all), shape (k,);
-    inf where the ray leaves nothing behind (an open mesh). [mm]"""
+    """Wall thickness at the centroids of ``faces`` (default all), shape (k,): the inward
+    ray's length to the face it leaves by, where that face looks away within
+    :data:`KNIFE_ANGLE_DEG` of straight back; inf where it does not (a blunt corner) or
+    where the ray leaves nothing behind (an open mesh). [mm]"""
     poly = _polydata(mesh.vertices, mesh.faces)
     locator = vtk.vtkStaticCellLocator()
     locator.SetDataSet(poly)
     locator.BuildLocator()
     length = float(np.linalg.norm(mesh.extents)) * 1.5
     idx = np.arange(len(mesh.faces)) if faces is None else np.asarray(faces)
+    normals = mesh.face_normals
     centroids = mesh.triangles_center[idx]
-    inward = -mesh.face_normals[idx]
+    inward = -normals[idx]
+    facing = -math.cos(math.radians(KNIFE_ANGLE_DEG))
     out = np.full(len(idx), np.inf)
     points, cells = vtk.vtkPoints(), vtk.vtkIdList()
     for k, (i, c, n) in enumerate(zip(idx, centroids, inward, strict=True)):
         points.Reset()
         cells.Reset()
         locator.IntersectWithLine(c + n * 1e-4, c + n * length, 1e-9, points, cells)
-        best = np.inf
+        best, exit_face = np.inf, -1
         for j in range(points.GetNumberOfPoints()):
             if cells.GetId(j) == i:
                 continue
             d = float(np.dot(np.asarray(points.GetPoint(j)) - c, n))
             if 1e-6 < d < best:
-                best = d
-        out[k] = best
+                best, exit_face = d, cells.GetId(j)
+        if exit_face >= 0 and float(np.dot(normals[i], normals[exit_face])) <= facing:
+            out[k] = best
     return out
-
-
-def weighted_percentile(values: np.ndarray, weights: np.ndarray, percent: float) -> float:
-    """Percentile of ``values`` with ``weights`` (e.g. triangle areas)."""
-    ok = np.isfinite(values)
-    v, w = values[ok], weights[ok]
-    order = np.argsort(v)
-    cum = np.cumsum(w[order])
-    k = int(np.searchsorted(cum, percent / 100.0 * cum[-1]))
-    return float(v[order][min(k, len(v) - 1)])
 
 
 def part_checks(
@@ -129,7 +131,9 @@ def part_checks(
     """Watertight, volume, smallest wall (and tooth tip) and build volume of one part.
 
     ``teeth``: the part's tooth zone; its triangles are left out of the ray wall check
-    and the exact normal tip thickness of the teeth is checked instead.
+    (the meshes of helicoid flanks and tip lands are long folded slivers, whose rays
+    measure the mesh, not the wall) and the exact normal tip thickness of the teeth is
+    checked instead.
     """
     mesh = load_stl(stl_path)
     closed = bool(mesh.is_watertight and mesh.is_winding_consistent)
@@ -153,8 +157,11 @@ def part_checks(
         c = mesh.triangles_center
         r = np.hypot(c[:, 0], c[:, 1])
         keep = ~((r >= teeth.min_radius_mm) & (c[:, 2] >= teeth.z0_mm) & (c[:, 2] <= teeth.z1_mm))
-    thickness = wall_thickness(mesh, np.flatnonzero(keep))
-    wall = weighted_percentile(thickness, mesh.area_faces[keep], WALL_PERCENTILE)
+    measured = np.flatnonzero(keep)
+    thickness = wall_thickness(mesh, measured)
+    thinnest = int(np.argmin(thickness))
+    wall = float(thickness[thinnest])
+    x, y, z = (float(v) for v in mesh.triangles_center[measured[thinnest]])
     limit = f">= {process.min_wall_mm:g} ({process.name})"
     rows.append(
         CheckRow(
@@ -164,9 +171,11 @@ def part_checks(
             limit,
             "mm",
             bool(wall >= process.min_wall_mm),
-            f"area-weighted {WALL_PERCENTILE:g} % percentile of inward ray thickness"
-            + (", outside the teeth" if teeth is not None else "")
-            + f"; absolute min {np.min(thickness):.3f} mm",
+            f"thinnest wall or knife edge (wedge under {KNIFE_ANGLE_DEG:g} deg) over all "
+            f"{len(thickness)} triangles"
+            + (" outside the teeth" if teeth is not None else "")
+            + f", at ({x:.2f}, {y:.2f}, {z:.2f}) mm in the print frame; "
+            f"{int(np.sum(thickness < process.min_wall_mm))} under the limit",
         )
     )
     if teeth is not None:

@@ -18,6 +18,7 @@ from cad.layout import CAP_MM, HEX_ENGAGEMENT_MM, WIRE_LEAD_IN_MM, ActuatorLayou
 from cad.solids import (
     X_AXIS,
     Z_AXIS,
+    annular_sector,
     box,
     cylinder,
     frame,
@@ -164,12 +165,17 @@ def worm_bushing(lay: ActuatorLayout) -> cq.Solid:
 
 
 def shaft_clip(lay: ActuatorLayout) -> cq.Solid:
-    """Printed snap clip (C-ring) for the clip groove; holds a shaft axially."""
+    """Printed snap clip (C-ring) for the clip groove; holds a shaft axially.
+
+    The opening is a sector 0.8 groove diameters wide at the bore: its faces are radial,
+    so they meet the ring's outer and inner faces square (a parallel-sided slot left
+    63 deg wedges at the outer corners)."""
     inner = lay.clip_groove_mm + lay.fit
-    ring = tube(lay.spec.shaft_journal_mm + 4.0, inner, 0.0, lay.clip_mm)
-    opening = 0.8 * lay.clip_groove_mm
-    slot = box((0.0, lay.spec.shaft_journal_mm), (-opening / 2, opening / 2), (-1.0, 2.0))
-    return single_solid(ring.cut(slot).clean(), "shaft clip")
+    outer = lay.spec.shaft_journal_mm + 4.0
+    ring = tube(outer, inner, 0.0, lay.clip_mm)
+    half = math.degrees(math.asin(0.8 * lay.clip_groove_mm / inner))
+    opening = annular_sector(inner - 1.0, outer + 1.0, -half, 2 * half, -1.0, lay.clip_mm + 1.0)
+    return single_solid(ring.cut(opening).clean(), "shaft clip")
 
 
 def wire_mount_depth(lay: ActuatorLayout) -> float:

@@ -14,12 +14,17 @@ upper one in a seat through the lid. Four M3 screws hold the lid on the end bulk
 
 from __future__ import annotations
 
+import math
+
 import cadquery as cq
 
 from cad.layout import ActuatorLayout
 from cad.solids import X_AXIS, box, cylinder, frame, single_solid
 
 SCREW_DEPTH_MM = 8.0
+SADDLE_HALF_ANGLE_DEG = 60.0
+"""Half the arc over which a lid tongue's saddle holds its spool: the saddle meets the
+tongue's flat ends at 180 - 60 = 120 deg. [deg]"""
 
 
 def _screw_positions(lay: ActuatorLayout) -> list[tuple[float, float]]:
@@ -82,9 +87,12 @@ def lid(lay: ActuatorLayout) -> cq.Solid:
     z0, z1 = lay.lid_z, lay.lid_z + s.lid_mm
     tongue = _slot_width(lay) - lay.fit
     h = lay.shaft_height
+    # The tongue's saddle wraps the spool over +-SADDLE_HALF_ANGLE_DEG and ends in flats:
+    # a saddle over the tongue's full width would meet its sides in 9 deg knife edges.
+    bottom = h + _slot_width(lay) / 2 * math.cos(math.radians(SADDLE_HALF_ANGLE_DEG))
     parts = [box(x, (-half, half), (z0, z1))]
     for b in lay.bulkheads:
-        parts.append(box((b.lo, b.hi), (-tongue / 2, tongue / 2), (h, z0 + 0.01)))
+        parts.append(box((b.lo, b.hi), (-tongue / 2, tongue / 2), (bottom, z0 + 0.01)))
     body = parts[0].fuse(*parts[1:]).clean()
     cuts: list[cq.Shape] = [
         cq.Solid.makeCylinder(

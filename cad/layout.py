@@ -290,7 +290,7 @@ def actuator_layout(
     clip_front = Span(b0.hi + s.flange_mm + 2 * ax, b0.hi + s.flange_mm + 2 * ax + 1.2)
     clip_rear = Span(b3.lo - s.flange_mm - 2 * ax - 1.2, b3.lo - s.flange_mm - 2 * ax)
     nose_x = clip_front.hi + 3.0
-    hex_hi = clip_rear.lo - 0.5
+    hex_hi = clip_rear.lo - process.wall_mm  # the groove's outer collar: a structural wall
     # The mount keeps HEX_ENGAGEMENT_MM on the hex anywhere in its travel.
     hex_span = Span(hex_hi - s.wire_mount_travel_mm - HEX_ENGAGEMENT_MM, hex_hi)
 

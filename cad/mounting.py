@@ -124,10 +124,23 @@ class MountingDims:
 
     def groove(self, piece: str) -> GrooveSpec:
         """The tracking groove of ``piece`` (``"proximal"`` or ``"distal"``): its pitch and
-        the notch travel on the visible length (the distal piece's body) less the width."""
-        visible = self.proximal_length if piece == "proximal" else self.body_length
+        the notch travel on the visible length (the proximal piece below its stop notch, the
+        distal piece's body) less the width and a wall at either end."""
+        proximal = self.proximal_length - self.notch_depth
+        visible = proximal if piece == "proximal" else self.body_length
         pitch = self.proximal_pitch if piece == "proximal" else self.distal_pitch
-        return GrooveSpec(pitch, visible - self.groove_width, self.groove_width, self.groove_depth)
+        travel = visible - self.groove_width - 2 * self.wall  # a wall short of either face
+        return GrooveSpec(pitch, travel, self.groove_width, self.groove_depth)
+
+    def groove_span(self, piece: str) -> tuple[float, float]:
+        """z of the groove centre's start and end on ``piece``: a wall plus half the width
+        inside the grooved length (the proximal piece below its notch, the distal piece's
+        body), so the groove ends square inside the faces instead of running out through
+        them. [mm]"""
+        lo = 0.0 if piece == "proximal" else self.journal_length
+        hi = self.proximal_length - self.notch_depth if piece == "proximal" else self.distal_length
+        margin = self.wall + self.groove_width / 2
+        return lo + margin, hi - margin
 
 
 @dataclass(frozen=True)
@@ -389,8 +402,9 @@ def helical_groove(
     The rectangular profile (``width`` along the axis, ``2 depth`` radially, centred on
     the surface) sits at the helix start in the XZ plane, which contains the axis, and is
     swept along ``cq.Wire.makeHelix`` with a Frenet frame (``isFrenet=True`` keeps it
-    from twisting). The helix runs from ``z_start`` to ``z_end`` (past both faces) and is
-    phased so that the groove crosses +X at z = 0. [mm]
+    from twisting). The helix (the groove's centre) runs from ``z_start`` to ``z_end``,
+    where the groove ends in faces that contain the axis, and is phased so that the groove
+    crosses +X at z = 0. [mm]
     """
     radius = outer_diameter / 2
     height = z_end - z_start
@@ -425,8 +439,7 @@ def proximal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     ]
     groove = None
     if with_groove:
-        e = d.groove_width + 1.0
-        groove = helical_groove(d.outer_diameter, d.groove("proximal"), -e, d.proximal_length + e)
+        groove = helical_groove(d.outer_diameter, d.groove("proximal"), *d.groove_span("proximal"))
     return _cut_all(envelope, groove, cuts)
 
 
@@ -453,8 +466,7 @@ def distal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     )
     groove = None
     if with_groove:
-        e = d.groove_width + 1.0
-        groove = helical_groove(d.outer_diameter, d.groove("distal"), -e, d.distal_length + e)
+        groove = helical_groove(d.outer_diameter, d.groove("distal"), *d.groove_span("distal"))
     cz = d.chamber_z
     cuts = [
         cylinder(d.seat_diameter, -1.0, d.pocket_depth_distal),

@@ -40,10 +40,12 @@ parallel, 180 deg antiparallel.
 
 Tracking (the paper's helical groove): a single-start groove of pitch p on a piece shows,
 seen from the side, a notch whose axial position moves by p / 360 mm per degree; on a
-visible length l it reads (l - groove width) 360 / p degrees. Each piece's pitch is the
+visible length l it reads (l - groove width - 2 w) 360 / p degrees: the groove stops a
+wall w short of either end face (run out through a face, its flank would meet the face in
+a knife edge). Each piece's pitch is the
 largest that reads the groove range (default 180 deg, the paper's sweep) on its visible
-length: the proximal piece's whole length, the distal piece's body (its journal runs
-inside the sleeve); a piece is lengthened where that pitch would be under
+length: the proximal piece's length below the stop notch, the distal piece's body (its
+journal runs inside the sleeve); a piece is lengthened where that pitch would be under
 :data:`PITCH_PER_WIDTH` groove widths. :attr:`TipGeometry.proximal_readout` and
 ``distal_readout`` give the readout resolution in m per rad (mm per degree: the same number
 times 1000 pi / 180).
@@ -240,9 +242,9 @@ def tip_geometry(
     ports w across, glue reliefs 0.6 w deep and 2 w long, key 2 w high, axial clearance of
     key and sleeve the running clearance. Volumes are exact for the axisymmetric features
     and the notch and key sectors; the helical groove removes its share width / pitch of
-    the annulus it cuts (exact for a screw sweep), its overlap with notch and key counted
-    by their angular share, the radial ports as straight holes: together within a few
-    tenths of a percent of the CAD solid's volume (tests/cad/test_cad_mounting.py).
+    the annulus over its centre's travel (exact for a screw sweep), the radial ports as
+    straight holes: together within a few tenths of a percent of the CAD solid's volume
+    (tests/cad/test_cad_mounting.py).
     """
     w, fit, clr = wall, fit_allowance, running_clearance
     groove_depth, groove_width = w / 2, 1.6 * w
@@ -267,10 +269,13 @@ def tip_geometry(
     sleeve_length = journal_length - axial_clearance
     notch_depth = key_height + axial_clearance
     notch_span = stop_angle + KEY_ANGLE
-    # Each grooved length reads groove_range at a pitch of at least PITCH_PER_WIDTH widths:
-    # l >= b (1 + PITCH_PER_WIDTH range / 2 pi), b the groove width.
-    least_visible = groove_width * (1 + PITCH_PER_WIDTH * groove_range / (2 * math.pi))
-    shoulder = _max(socket_depth + w + magnet_length, least_visible - sleeve_length)
+    # Each grooved length reads groove_range at a pitch of at least PITCH_PER_WIDTH widths,
+    # the groove stopping a wall short of either end face (a groove that runs out through a
+    # face leaves a knife edge between its flank and the face):
+    # l >= b (1 + PITCH_PER_WIDTH range / 2 pi) + 2 w, b the groove width.
+    least_visible = groove_width * (1 + PITCH_PER_WIDTH * groove_range / (2 * math.pi)) + 2 * w
+    # The proximal groove ends below the notch (its end in the notch left a knife edge).
+    shoulder = _max(socket_depth + w + magnet_length, least_visible + notch_depth - sleeve_length)
     proximal_length = shoulder + sleeve_length
     # The body holds its glue chamber between two walls and a readable groove.
     body = _max(reservoir_length + 2 * w, least_visible)
@@ -278,10 +283,13 @@ def tip_geometry(
     chamber_z = journal_length + body / 2
 
     def pitch(visible: Any) -> Any:
-        return 2 * math.pi * (visible - groove_width) / groove_range
+        return 2 * math.pi * (visible - groove_width - 2 * w) / groove_range
 
-    proximal_pitch, distal_pitch = pitch(proximal_length), pitch(body)
+    proximal_pitch, distal_pitch = pitch(proximal_length - notch_depth), pitch(body)
     groove_inner = outer - 2 * groove_depth
+    # A screw sweep removes width / pitch of the annulus over its centre's travel, which
+    # runs from a wall plus half the width above a piece's grooved length to as far below.
+    b2 = groove_width / 2
     notch_share = notch_span / (2 * math.pi)
     key_share = KEY_ANGLE / (2 * math.pi)
     port_z = socket_depth / 2
@@ -295,13 +303,12 @@ def tip_geometry(
             _disc(seat, shoulder - magnet_length, shoulder),
             _disc(sleeve_bore, shoulder, proximal_length),
             _ring(outer, sleeve_bore, proximal_length - notch_depth, proximal_length, notch_share),
-            _ring(outer, groove_inner, 0, proximal_length, groove_width / proximal_pitch),
             _ring(
                 outer,
                 groove_inner,
-                proximal_length - notch_depth,
-                proximal_length,
-                -notch_share * groove_width / proximal_pitch,
+                w + b2,
+                proximal_length - notch_depth - w - b2,
+                groove_width / proximal_pitch,
             ),
         ],
     )
@@ -321,13 +328,12 @@ def tip_geometry(
                 chamber_z + reservoir_length / 2,
             ),
             _port(port, chamber_z, chamber, outer),
-            _ring(outer, groove_inner, journal_length, distal_length, groove_width / distal_pitch),
             _ring(
                 outer,
                 groove_inner,
-                journal_length - key_height,
-                journal_length,
-                key_share * groove_width / distal_pitch,
+                journal_length + w + b2,
+                distal_length - w - b2,
+                groove_width / distal_pitch,
             ),
         ],
     )

@@ -50,6 +50,7 @@ from ringpair.angles import parse_angles
 if TYPE_CHECKING:
     from optimize.fitting.measurements import Measurements
     from optimize.sizing.studyfile import Study
+    from ringpair.runs import RunFolder
 
 # Text is printed as written: no emoji codes (rich would print an angle range like 0:abc:5
 # as '0🔤5') and no markup (a design named 'a[/]b' or a path with brackets would break it
@@ -329,23 +330,43 @@ def _same(a: Path, b: Path) -> bool:
 def check_configurations(
     n: int, limit: int, what: str, *, solves: int = 1, held: bool = True
 ) -> None:
-    """Size a request up front: refuse (UserError) ``n`` configurations, each solved
-    ``solves`` times (models compared), above ``limit`` solves, giving the size and an
-    estimate of the time (and of the memory, when all are ``held`` at once); below it,
-    announce a run of more than ANNOUNCE seconds on stderr. ``what`` names the options
-    that asked for them."""
+    """Size a request up front (:func:`check_request`): ``n`` configurations, each solved
+    ``solves`` times (models compared), at most ``limit`` solves, at SOLVE_RATE, with the
+    memory when all are ``held`` at once. ``what`` names the options that asked for them."""
     total = n * solves
-    seconds = total / SOLVE_RATE
-    if total <= limit:
+    check_request(
+        total,
+        limit,
+        what,
+        f"{n:,} configurations" + (f" x {solves} models = {total:,} solves" if solves > 1 else ""),
+        total / SOLVE_RATE,
+        "--max-configs",
+        n * ROW_BYTES if held else None,
+    )
+
+
+def check_request(
+    count: int,
+    limit: int,
+    what: str,
+    size: str,
+    seconds: float,
+    raise_with: str,
+    memory: float | None = None,
+) -> None:
+    """Size a request before any work: refuse (UserError) ``count`` pieces of work above
+    ``limit``, saying its ``size`` (text), the time estimate ``seconds`` [s] and, if given,
+    the ``memory`` [bytes]; below it, announce on stderr a run estimated above ANNOUNCE
+    seconds. ``what`` names the options that asked for it, ``raise_with`` the option that
+    lifts the limit."""
+    if count <= limit:
         if seconds > ANNOUNCE:
-            err_console.print(f"solving {total:,} configurations: about {duration(seconds)}")
+            err_console.print(f"{what}: {size}, about {duration(seconds)}")
         return
-    memory = f" and {n * ROW_BYTES / 1e9:.3g} GB of memory" if held else ""
+    held = f" and {memory / 1e9:.3g} GB of memory" if memory is not None else ""
     raise UserError(
-        f"{what}: {n:,} configurations"
-        + (f" x {solves} models = {total:,} solves" if solves > 1 else "")
-        + f", about {duration(seconds)}{memory}; at most {limit:,} are solved unless "
-        "--max-configs says more"
+        f"{what}: {size}, about {duration(seconds)}{held}; at most {limit:,} unless "
+        f"{raise_with} says more"
     )
 
 
@@ -475,3 +496,38 @@ def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements
         if data.is_dir():
             return load_dataset(data)
         return design_from(design), load_measurements(data)
+
+
+@contextmanager
+def held_run(out: Path, command: str, keep: Iterable[str] = ()) -> Iterator[RunFolder]:
+    """A command's run writing the folder ``out`` as one run's
+    (:func:`ringpair.runs.run_folder`), for commands that write a folder without a study's
+    stages (``cad``, ``workspace``): another run in it is refused (UserError naming --out);
+    an interrupted earlier run is warned about; when the run ends whole (normally or by its
+    exit code, e.g. ``cad``'s 3 for a failed check), :func:`ringpair.runs.finish_run`
+    removes the earlier run's outputs that this run did not write again (never under the
+    folders ``keep``) and writes ``manifest.json`` of the files this run wrote. A run that
+    fails in a folder it made, before writing anything, leaves no folder."""
+    from ringpair.runs import LOCK, FolderBusy, finish_run, run_folder
+
+    made = not out.exists()
+    try:
+        with run_folder(out, command) as folder:
+            if folder.interrupted is not None:
+                warn(
+                    f"the previous run into {out} was interrupted; its files are replaced, "
+                    "and those of its that this run does not write again are removed"
+                )
+            try:
+                yield folder
+            except SystemExit:
+                finish_run(folder, keep)
+                raise
+            finish_run(folder, keep)
+    except FolderBusy as exc:
+        raise UserError(f"--out {out}: {exc}") from None
+    except Exception:
+        if made and {p.name for p in out.iterdir()} <= {LOCK}:
+            (out / LOCK).unlink(missing_ok=True)
+            out.rmdir()
+        raise

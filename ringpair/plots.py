@@ -259,13 +259,24 @@ def plot_deflection(sweep: Equilibria, ws: Workspace, path: Path) -> None:
     _save(fig, path)
 
 
-def plot_force_map(grid_deg: np.ndarray, force_mn: np.ndarray, path: Path, title: str) -> None:
+def plot_force_map(
+    grid_deg: np.ndarray,
+    force_mn: np.ndarray,
+    path: Path,
+    title: str,
+    marks_deg: np.ndarray | None = None,
+    mark_label: str = "",
+) -> None:
     """The magnitude of the force the tip exerts on the obstacles [mN] over (theta1 rows,
-    theta2 columns) [deg]; blank where the tip does not press."""
+    theta2 columns) [deg]; blank where the tip does not press; ``marks_deg`` (n, 2): ring
+    angles marked on it (``steer --press``'s answers), labelled ``mark_label``."""
     fig, ax = plt.subplots(figsize=(6.0, 5.0))
     shown = np.ma.masked_invalid(force_mn.T)
     mesh = ax.pcolormesh(grid_deg, grid_deg, shown, shading="nearest", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label="force on the obstacle [mN]")
+    if marks_deg is not None and len(marks_deg):
+        ax.plot(*marks_deg.T, "o", ms=4, mfc="white", mec="crimson", label=mark_label)
+        ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel("theta1 (distal ring) [deg]")
     ax.set_ylabel("theta2 (proximal ring) [deg]")
     ax.set_title(title + "\n(blank: no contact)", fontsize=9)

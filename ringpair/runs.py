@@ -133,6 +133,35 @@ def run_folder(out: Path, command: str) -> Iterator[RunFolder]:
         os.close(fd)
 
 
+def finish_run(folder: RunFolder, keep: Iterable[str] = ()) -> None:
+    """Remove the earlier run's stale outputs, then write ``manifest.json``: the command,
+    the run's folder (an interrupted earlier run, the stale files removed) and every file
+    this run wrote (modified since it started), with its size and SHA-256."""
+    folder.remove_stale(keep)
+    files = sorted(
+        p
+        for p in folder.out.rglob("*")
+        if p.is_file()
+        and not p.is_symlink()
+        and p.name != MANIFEST
+        and not p.name.startswith(".ringpair")
+        and p.stat().st_mtime >= folder.started
+    )
+    doc = {
+        "command": folder.command,
+        "started": folder.started,
+        "run": {
+            "previous_run_interrupted": folder.interrupted is not None,
+            "removed_stale": folder.removed,
+        },
+        "files": [
+            {"path": str(p.relative_to(folder.out)), "bytes": p.stat().st_size, "sha256": sha256(p)}
+            for p in files
+        ],
+    }
+    write_text(folder.out / MANIFEST, json.dumps(doc, indent=2) + "\n")
+
+
 def _marker(path: Path) -> dict[str, Any] | None:
     """What an interrupted run's marker says, {} if unreadable, None if there is none."""
     if not path.exists():
@@ -203,6 +232,7 @@ __all__ = [
     "RUNNING",
     "FolderBusy",
     "RunFolder",
+    "finish_run",
     "inputs_key",
     "run_folder",
     "sha256",

@@ -5,6 +5,7 @@ Jacobian, stability indicator, tip pose) is built.
 One module per concept, their public names re-exported here:
 
 - :mod:`design.model.effects`: the effects by name and how options name sets of them;
+- :mod:`design.model.loads`: effects as objects, the loads each adds (printed tip, gravity);
 - :mod:`design.model.symbols`: the parameter symbols and the quantities derived from them;
 - :mod:`design.model.field`: the field of the external magnet and the field sources;
 - :mod:`design.model.ring_pair`: :class:`RingPairModel` (the module's docstring describes

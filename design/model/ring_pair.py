@@ -53,6 +53,7 @@ import numpy as np
 from design import cantilever, rod
 from design.model.effects import PRINTED_TIP, SWITCHES
 from design.model.field import CLASSIC, FieldLayout, field_model, layout_of, magnet_clearance
+from design.model.loads import TipFrame, tip_effects
 from design.model.symbols import Symbols, ring_positions
 from design.records import Design
 from design.registry import NAMES, index, model_vector
@@ -195,9 +196,11 @@ class RingPairModel:
         rod_length = s.rod_length
         angles = x[n_rod:] if torsion else command
         moment = load * s.ring_moment
+        loaded = tip_effects(effects)  # the effects with loads of their own
         weight_rate = ca.SX.zeros(3)  # distributed load per unit load_scale [N/m]
-        if "gravity" in effects:
-            weight_rate = s.rod_mass_per_length * s.gravity
+        for effect in loaded:
+            rate = effect.weight_rate(s)
+            weight_rate = weight_rate if rate is None else weight_rate + rate
         distributed = load * weight_rate
         field_model = self._field_model(s)
         # Point masses on the rigid segment: (arm from the rod's end along the tangent, mass).
@@ -206,11 +209,8 @@ class RingPairModel:
             (offset + s.magnet_spacing, s.ring_mass),
             (offset, s["tip_mass"]),
         ]
-        if printed:
-            masses += [
-                (s.tip.proximal_arm, s.tip.proximal_mass),
-                (s.tip.distal_arm, s.tip.distal_mass),
-            ]
+        for effect in loaded:
+            masses += effect.masses(s)
         # Twist of each transmission per unit axial torque, L / GJ. [rad / (N m)]
         twist_compliance = length / s.torsional_rigidity
         twist = twist_compliance if torsion else None
@@ -230,13 +230,9 @@ class RingPairModel:
             )
             force = force + load * s.applied_force  # (an external wrench, 0 in a design)
             torque = torque + load * s.applied_moment
-            if printed:
-                torque = torque + offset * ca.cross(tangent, force)
-            if "gravity" in effects:
-                g = load * s.gravity
-                for arm, mass in masses:
-                    force = force + mass * g
-                    torque = torque + arm * ca.cross(tangent, mass * g)
+            at = TipFrame(s, load, offset, tangent, tuple(masses))
+            for effect in loaded:
+                force, torque = effect.add(at, force, torque)
             out = [force, torque]
             if torsion:
                 axial = self._axial_torques(

@@ -14,6 +14,7 @@ from ringpair.options import (
     console,
     default_out,
     design_from,
+    held_run,
     output_path,
     path_option,
     progress,
@@ -43,8 +44,9 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
 
     Writes ringpair_robot.step (assembly with named parts), stl/<part>.stl, 3MF print
     plates, checks.csv (watertight, volume, minimum wall, build volume, interference, gear
-    centre distance), parts.csv, cad_summary.json and renders/*.png. Exits 3 if a
-    printability check fails.
+    centre distance), parts.csv, cad_summary.json, renders/*.png and manifest.json (what
+    this run wrote; an earlier run's files it did not write again, e.g. another process's
+    plates, are removed). Exits 3 if a printability check fails.
     """
     d = design_from(design)
     typed = out is not None
@@ -53,8 +55,9 @@ def cad(design: Path | None, out: Path | None, process: str, no_render: bool) ->
     )
     from cad import CadError, build_parts  # after the inputs are checked: CAD loads slowly
 
-    with progress("building, exporting, checking and rendering parts"), bad_input(CadError):
-        report = build_parts(d, out, process, render=not no_render)
-    console.print(report.summary(), highlight=False)
-    if not report.passed:
-        sys.exit(3)
+    with held_run(out, "cad"):
+        with progress("building, exporting, checking and rendering parts"), bad_input(CadError):
+            report = build_parts(d, out, process, render=not no_render)
+        console.print(report.summary(), highlight=False)
+        if not report.passed:
+            sys.exit(3)

@@ -23,6 +23,7 @@ from ringpair.options import (
     base_file,
     console,
     default_out,
+    held_run,
     json_text,
     output_path,
     path_option,
@@ -38,7 +39,7 @@ if TYPE_CHECKING:
     from optimize.sizing.studyfile import Study
 
 
-FILES = ("best_design.toml", "workspace.png", "pareto.png", "summary.json")
+FILES = ("best_design.toml", "workspace.png", "pareto.png", "summary.json", "manifest.json")
 """What ``optimize`` writes in its folder (and pareto_<quantity>.csv, points/)."""
 
 
@@ -59,8 +60,10 @@ def optimize(
 
     Writes best_design.toml, pareto_<quantity>.csv, pareto.png, workspace.png and
     summary.json. Pareto points run on Dask and are kept in OUT/points, so a rerun of the
-    same study resumes. Exit 0 also for an infeasible study: the conflict report is
-    printed and written to summary.json; exit 2 for a bad study file.
+    same study resumes. manifest.json lists what the run wrote; an earlier run's files it
+    did not write again (a best design after an infeasible rerun, Pareto files after a run
+    without Pareto) are removed, the points kept. Exit 0 also for an infeasible study: the
+    conflict report is printed and written to summary.json; exit 2 for a bad study file.
     """
     from optimize.sizing.nlp import optimize_design, start_breaks
     from ringpair.plots import plot_fronts, plot_workspaces
@@ -78,47 +81,49 @@ def optimize(
         files=FILES,
         inputs=[study_path, base_file(study)],
     )
-    with progress(f"solving '{study.name}' ({study.starts} starts per material)"):
-        best = optimize_design(study)
-    console.print(best.report())
-    model = RingPairModel(study.effects)
-    with progress("forward simulation of the starting and the best design"):
-        start_ws = sweep_workspace(study.base, model=model)
-        end_ws = sweep_workspace(best.design, model=model) if best.design is not None else None
-    written = []
-    if best.design is not None and end_ws is not None:
-        save_design(best.design, out / "best_design.toml")
-        written.append(out / "best_design.toml")
-        plot_workspaces(start_ws, end_ws, out / "workspace.png")
-        written.append(out / "workspace.png")
-        console.print(
-            f"disc radius by forward simulation: start {start_ws.disc_radius / MM:.2f} mm, "
-            f"best {end_ws.disc_radius / MM:.2f} mm"
-        )
-        broken = start_breaks(study)
-        if broken:
-            console.print("the starting design breaks the study's limits: " + "; ".join(broken))
-        if "controllable_disc_radius" in best.metrics:
+    with held_run(out, "optimize", keep=("points",)):
+        with progress(f"solving '{study.name}' ({study.starts} starts per material)"):
+            best = optimize_design(study)
+        console.print(best.report())
+        model = RingPairModel(study.effects)
+        with progress("forward simulation of the starting and the best design"):
+            start_ws = sweep_workspace(study.base, model=model)
+            end_ws = sweep_workspace(best.design, model=model) if best.design is not None else None
+        written = []
+        if best.design is not None and end_ws is not None:
+            save_design(best.design, out / "best_design.toml")
+            written.append(out / "best_design.toml")
+            plot_workspaces(start_ws, end_ws, out / "workspace.png")
+            written.append(out / "workspace.png")
             console.print(
-                "controllable disc (steerable from rest without a snap, the study's model): "
-                f"start {best.base_metrics['controllable_disc_radius'] / MM:.2f} mm, "
-                f"best {best.metrics['controllable_disc_radius'] / MM:.2f} mm"
+                f"disc radius by forward simulation: start {start_ws.disc_radius / MM:.2f} mm, "
+                f"best {end_ws.disc_radius / MM:.2f} mm"
             )
-    pareto = None
-    if study.pareto and not no_pareto:
-        pareto = _run_sweeps(study, out, scheduler, workers, best.values)
-        written += write_pareto_csvs(pareto, study, out)
-        plot_fronts(pareto, best, study, out / "pareto.png")
-        written.append(out / "pareto.png")
-        console.print(
-            f"Pareto: {pareto.solved} points solved, {pareto.resumed} resumed, "
-            f"{pareto.seconds:.1f} s on {pareto.workers or 'no'} workers"
-        )
-    doc = summary(study, best, start_ws, end_ws, pareto)
-    write_text(out / "summary.json", json_text(doc))
-    written.append(out / "summary.json")
-    for path in written:
-        console.print(f"wrote {path}")
+            broken = start_breaks(study)
+            if broken:
+                console.print("the starting design breaks the study's limits: " + "; ".join(broken))
+            if "controllable_disc_radius" in best.metrics:
+                console.print(
+                    "controllable disc (steerable from rest without a snap, the study's model): "
+                    f"start {best.base_metrics['controllable_disc_radius'] / MM:.2f} mm, "
+                    f"best {best.metrics['controllable_disc_radius'] / MM:.2f} mm"
+                )
+        pareto = None
+        if study.pareto and not no_pareto:
+            pareto = _run_sweeps(study, out, scheduler, workers, best.values)
+            written += write_pareto_csvs(pareto, study, out)
+            plot_fronts(pareto, best, study, out / "pareto.png")
+            written.append(out / "pareto.png")
+            console.print(
+                f"Pareto: {pareto.solved} points solved, {pareto.resumed} resumed, "
+                f"{pareto.seconds:.1f} s on {pareto.workers or 'no'} workers"
+            )
+        doc = summary(study, best, start_ws, end_ws, pareto)
+        write_text(out / "summary.json", json_text(doc))
+        written.append(out / "summary.json")
+        for path in written:
+            console.print(f"wrote {path}")
+    console.print(f"wrote {out / 'manifest.json'}")
 
 
 def _run_sweeps(

@@ -29,7 +29,10 @@ from design.steering import REACHED, Steering, steer
 from design.units import MM
 from ringpair.options import (
     DESIGN,
+    MAX_CONFIGS,
+    FloatRange,
     UserError,
+    check_request,
     console,
     default_out,
     design_from,
@@ -39,11 +42,14 @@ from ringpair.options import (
     path_option,
 )
 from ringpair.plots import plot_path
+from ringpair.pressing import PRESS_STEP, steer_press
 from ringpair.tables import write_csv
 
-MAX_TARGETS = 100_000
-"""Targets per run at most (about a minute with the baseline model, far more with the
-model for design work)."""
+TARGET_SECONDS = 0.1
+"""Time one target takes with the model for design work (its seed grid aside): 2000
+targets took 209 s and 200 took 28 s on the development machine (2 cores, shared). [s]"""
+MAX_TARGETS = 3_000
+"""Targets per run unless --max-targets says more: about five minutes at TARGET_SECONDS."""
 
 STEER_COLUMNS = (
     "target",
@@ -184,12 +190,36 @@ def steer_rows(result: Steering) -> list[dict]:
     "workspace's centre, the mean tip with the rings parallel).",
 )
 @click.option("--closed", is_flag=True, help="A CSV path returns to its first point.")
+@click.option(
+    "--press",
+    type=FloatRange(0.0, None, min_open=True),
+    default=None,
+    metavar="MN",
+    help="Press the tip on the design's obstacles with this force [mN]: every pair of ring "
+    "angles that does, found where the curves of that force cross the ring grid's lines. "
+    "Writes simulate's columns per answer and the force map with the answers marked.",
+)
+@click.option(
+    "--step",
+    type=FloatRange(0.1, 90.0),
+    default=None,
+    help=f"Grid step of both rings for --press [deg] (default {PRESS_STEP:g}).",
+)
 @path_option(
     "--out",
     help="CSV to write. Default: outputs/<design name>/steer.csv (steer_path.csv with "
     "--path, and its plot beside it as .png; with --path the name must end in .csv).",
 )
 @effects_option("default")
+@click.option(
+    "--max-targets",
+    type=click.IntRange(1, None),
+    default=MAX_TARGETS,
+    show_default=True,
+    help="Refuse more targets than this (about a tenth of a second each with the model for "
+    "design work; the estimate is given); raise it for a long run.",
+)
+@MAX_CONFIGS
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
 def steer_command(
     design: Path | None,
@@ -199,12 +229,16 @@ def steer_command(
     points: int | None,
     center: str | None,
     closed: bool,
+    press: float | None,
+    step: float | None,
     out: Path | None,
     effects: str,
+    max_targets: int,
+    max_configs: int,
     quiet: bool,
 ) -> None:
-    """The ring angles that put the tip of DESIGN at each target (y, z), or drive it along
-    a path.
+    """The ring angles that put the tip of DESIGN at each target (y, z), drive it along a
+    path, or press it on the design's obstacles with a force.
 
     Targets (--to, --targets): every pair of ring angles whose state (the stable
     equilibrium the robot reaches with the rings held there) puts the tip on the target, to
@@ -213,7 +247,8 @@ def steer_command(
     how far from snapping) and the tip tangent. A target out of reach gets the closest
     reachable point, flagged reached = false, with its distance. CSV columns: target
     (1-based), target_y_mm, target_z_mm, theta1_deg, theta2_deg, x_mm, y_mm, z_mm, the tip
-    tangent, error_mm, reached, stable, snapped, multistable, fold_margin.
+    tangent, error_mm, reached, stable, snapped, multistable, fold_margin. More than
+    --max-targets targets are refused with an estimate of their time.
 
     A path (--path): one solution per point, chosen for the smallest total ring rotation
     without jumps between solution branches, then driven as the robot is (each state
@@ -222,9 +257,26 @@ def steer_command(
     theta2_deg (continuous along the path), knob1_turns, knob2_turns (turns of the
     actuator's knobs from the first point: the wire's and the catheter's worm drive), y_mm,
     z_mm (the driven tip), error_mm, reached, snapped (the move into this point snapped).
+
+    A force (--press MN): frictionless contact holds the force along the obstacle's
+    normal, so the ring angles that press with a magnitude form curves over both ring
+    angles; every point where they cross the lines of a --step grid, located to 0.0001 mN.
+    One row per answer with simulate's columns (contact force, point, stiffness), the
+    force map with the answers marked beside the CSV (.png).
     """
     d = design_from(design)
     model = model_from(effects).for_design(d)
+    if press is not None:
+        if to or targets is not None or path_spec is not None:
+            raise UserError(
+                "--press finds angles for a force; give it without --to, --targets or --path"
+            )
+        if points is not None or center is not None or closed:
+            raise UserError("--points, --center and --closed belong to --path")
+        steer_press(d, model, design, press, step, out, max_configs)
+        return
+    if step is not None:
+        raise UserError("--step is the grid of --press")
     if path_spec is not None:
         if to or targets is not None:
             raise UserError("--path drives along a path; give it without --to or --targets")
@@ -238,10 +290,15 @@ def steer_command(
     if not wanted:
         raise UserError("give a target: --to Y,Z (mm), --targets FILE.csv or --path SPEC")
     _within_reach(d, wanted)
-    if len(wanted) > MAX_TARGETS:
-        raise UserError(
-            f"{len(wanted):,} targets; at most {MAX_TARGETS:,} per run (split the file)"
-        )
+    n = len(wanted)
+    check_request(
+        n,
+        max_targets,
+        " and ".join(o for o, given in (("--to", to), ("--targets", targets)) if given),
+        f"{n:,} targets",
+        n * TARGET_SECONDS,
+        "--max-targets",
+    )
     out = output_path(
         out or default_out(d.name, "steer.csv"),
         "--out",

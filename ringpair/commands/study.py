@@ -28,6 +28,7 @@ from rich.text import Text
 from design.designfile import read_regular
 from optimize.sizing.studyfile import Study
 from ringpair.options import (
+    ANNOUNCE,
     OVERWRITE_POLICY,
     ROW_BYTES,
     SCHEDULER,
@@ -194,6 +195,11 @@ def study(
             f"solves {TOLERANCE_LOOP} configurations: about "
             f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} and "
             f"{samples * TOLERANCE_LOOP * ROW_BYTES / 1e9:.3g} GB)"
+        )
+    if samples * TOLERANCE_LOOP / SOLVE_RATE > ANNOUNCE:
+        err_console.print(
+            f"--samples: {samples:,} samples x {TOLERANCE_LOOP} configurations, about "
+            f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} in the tolerance stage"
         )
     process = _process(process)
     if s.pareto:

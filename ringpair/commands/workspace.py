@@ -26,6 +26,7 @@ from ringpair.options import (
     design_from,
     effects_option,
     grid_step_option,
+    held_run,
     json_text,
     model_from,
     output_path,
@@ -42,6 +43,7 @@ FILES = (
     "section.png",
     "deflection.png",
     "controllable.png",
+    "manifest.json",
 )
 """What ``workspace`` writes in its folder."""
 
@@ -89,32 +91,38 @@ def workspace(
         files=FILES,
         inputs=[design],
     )
-    with progress("sweeping the workspace"):
-        try:
-            ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
-        except NoWorkspace as exc:
-            raise UserError(
-                f"design '{d.name}' ({model.name} model) has no workspace to map: {exc}; "
-                "nothing written"
-            ) from None
-        sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
-        sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
-    with progress("driving between neighbouring configurations (the controllable workspace)"):
-        ctl = steerable(ws, model, model.parameters(d))
-    write_csv(
-        out / "workspace.csv",
-        pose_rows(ws.grid, ws.rest_position, tip_stiffness(model, model.parameters(d), ws.grid)),
-        POSE_COLUMNS,
-        header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, model {model.name}",
-    )
-    summary = workspace_summary(ws, d, step, model.name, ctl)
-    write_text(out / "summary.json", json_text(summary))
-    pictures = write_workspace_plots(ws, sweep, d, out)
-    plot_controllable(ws, ctl, out / "controllable.png", model.name)
-    pictures.append(out / "controllable.png")
-    _print_summary(summary)
+    with held_run(out, "workspace"):
+        with progress("sweeping the workspace"):
+            try:
+                ws = sweep_workspace(d, np.deg2rad(step), model, multistable=True)
+            except NoWorkspace as exc:
+                raise UserError(
+                    f"design '{d.name}' ({model.name} model) has no workspace to map: {exc}; "
+                    "nothing written"
+                ) from None
+            sweep_deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
+            sweep = solve_design(d, np.deg2rad(sweep_deg), 0.0, model)
+        with progress("driving between neighbouring configurations (the controllable workspace)"):
+            ctl = steerable(ws, model, model.parameters(d))
+        write_csv(
+            out / "workspace.csv",
+            pose_rows(
+                ws.grid, ws.rest_position, tip_stiffness(model, model.parameters(d), ws.grid)
+            ),
+            POSE_COLUMNS,
+            header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, "
+            f"model {model.name}",
+        )
+        summary = workspace_summary(ws, d, step, model.name, ctl)
+        write_text(out / "summary.json", json_text(summary))
+        pictures = write_workspace_plots(ws, sweep, d, out)
+        plot_controllable(ws, ctl, out / "controllable.png", model.name)
+        pictures.append(out / "controllable.png")
+        _print_summary(summary)
     console.print(
-        f"wrote {out}/: workspace.csv, summary.json, " + ", ".join(p.name for p in pictures)
+        f"wrote {out}/: workspace.csv, summary.json, "
+        + ", ".join(p.name for p in pictures)
+        + ", manifest.json"
     )
 
 

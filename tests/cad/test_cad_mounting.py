@@ -113,8 +113,10 @@ def test_groove_pitch_and_width_measured_from_the_solid(fdm_pieces) -> None:
     d = fdm_pieces.dims
     groove = d.groove("proximal")
     probe = d.outer_diameter / 2 - groove.depth_mm / 2
-    # Stay clear of the faces, the glue port (180 deg, low z) and the stop notch (top end).
-    angles = np.arange(30.0, 131.0, 10.0)
+    # Within the groove's ends (a wall inside the faces: issue 52), clear of the glue port
+    # (180 deg, low z) and the stop notch (top end).
+    start, end = (360.0 * z / groove.pitch_mm for z in d.groove_span("proximal"))
+    angles = np.linspace(start + 10.0, min(start + 110.0, end - 10.0), 11)
     z, width = _notch_centres(fdm_pieces.proximal, probe, d.proximal_length, angles)
     slope, z0 = np.polyfit(angles, z, 1)
     residual = z - (z0 + slope * angles)
@@ -138,12 +140,13 @@ def test_each_groove_reads_the_range_on_its_visible_length(demonstrator: Design,
     # on the piece as made, and reports its readout in mm per degree.
     spec = MountingSpec(groove_range_deg=range_deg)
     d = mounting_dims(demonstrator, RESIN, spec)
-    pieces = {"proximal": d.proximal_length, "distal": d.body_length}
+    # visible: the proximal piece below its notch, the distal body; a wall kept either end
+    pieces = {"proximal": d.proximal_length - d.notch_depth, "distal": d.body_length}
     for t in build_reports(d, spec):
         assert t.range_deg == pytest.approx(range_deg)
         assert t.readout_mm_per_deg == pytest.approx(t.pitch_mm / 360.0)
         assert t.resolution_deg_per_mm == pytest.approx(1 / t.readout_mm_per_deg)
-        assert t.travel_mm == pytest.approx(pieces[t.piece] - d.groove_width)
+        assert t.travel_mm == pytest.approx(pieces[t.piece] - d.groove_width - 2 * d.wall)
         assert d.groove_width < t.pitch_mm / 2  # the groove stays a single notch
 
 

@@ -71,10 +71,10 @@ def test_resin_makes_the_smallest_tip():
 def test_grooves_read_the_range_at_a_readable_pitch(range_deg):
     g = design_tip_geometry(default_design(), groove_range=math.radians(range_deg))
     for visible, pitch, readout in (
-        (g.proximal_length, g.proximal_pitch, g.proximal_readout),
+        (g.proximal_length - g.notch_depth, g.proximal_pitch, g.proximal_readout),
         (g.body_length, g.distal_pitch, g.distal_readout),
     ):
-        travel = visible - g.groove_width
+        travel = visible - g.groove_width - 2 * g.wall  # the groove stops a wall short
         assert readout * math.radians(range_deg) == pytest.approx(travel, rel=1e-12)
         assert readout == pytest.approx(pitch / (2 * math.pi))
         assert pitch >= PITCH_PER_WIDTH * g.groove_width * (1 - 1e-12)

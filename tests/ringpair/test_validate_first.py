@@ -39,6 +39,10 @@ def one_message(result, *words):
         (("simulate", "--effects", "", "--theta1", "0"), ["--effects", "no model effect"]),
         (("simulate", "--effects", ",,", "--theta1", "0"), ["--effects", "no model effect"]),
         (("study", "--samples", "100000000"), ["--samples", "100,000", "GB"]),
+        (
+            ("steer", "--to", "1,1", "--to", "2,2", "--to", "1,2", "--max-targets", "2"),
+            ["--to: 3 targets, about", "at most 2 unless --max-targets"],
+        ),
     ],
     ids=[
         "study seed -1",
@@ -47,6 +51,7 @@ def one_message(result, *words):
         "effects ''",
         "effects ,,",
         "samples",
+        "steer targets",
     ],
 )
 def test_bad_options_are_one_message(tmp_path, run, monkeypatch, args, words):
