@@ -103,13 +103,16 @@ def _solve_point(
     """One point: (result, '') or (None, why it raised). With ``previous`` (the
     neighbour's answer, looser bound) or ``start`` (free quantities, SI), the NLP starts
     from the neighbour's design if it was feasible, else from ``start``; if that finds no
-    feasible design the point is solved again from the study's own starts, so a warm
-    start never loses a point the cold path finds."""
+    feasible design the point is solved again from the study's own starts (which alone
+    look for the conflicting constraints), so a warm start never loses a point the cold
+    path finds."""
     try:
         if previous is not None and previous[0] is not None and previous[0].feasible:
             start = previous[0].values
         if start is not None:
-            warm = optimize_design(study, epsilon={against: epsilon}, starts=[start])
+            warm = optimize_design(
+                study, epsilon={against: epsilon}, starts=[start], conflicts=False
+            )
             if warm.feasible:
                 return warm, ""
         return optimize_design(study, epsilon={against: epsilon}), ""
