@@ -1,7 +1,9 @@
 """Fuzz the command line: many more generated cases than CI's property tests
 (tests/ringpair/test_fuzz.py), at random, with the same strategies and checks
 (tests/support/fuzzing.py): design files, study files (also valid ones, which run the
-optimiser), measurement CSVs and option strings, through ``ringpair`` in-process.
+optimiser), measurement CSVs, option strings and hostile inputs (file kinds, deep
+nesting, integers beyond int64, designs at the corners of the design space), through
+``ringpair`` in-process.
 
 Printed per family and in all: cases, exit 0, exit 2, failures (a broken promise: another
 exit code, a traceback, a file written on exit 2 or outside the folder, a row that
@@ -28,6 +30,7 @@ sys.path.insert(0, str(_HERE.parent / "tests" / "support"))
 from fuzzing import (  # noqa: E402
     data_cases,
     design_cases,
+    input_cases,
     option_cases,
     run_case,
     study_cases,
@@ -39,6 +42,7 @@ FAMILIES = {
     "options": option_cases(),
     "data": data_cases(),
     "study": study_cases(hostile=False),
+    "inputs": input_cases(),
 }
 
 

@@ -89,21 +89,36 @@ EXTERNAL_SHAPES = ("cylinder",)
 UNIT_TOLERANCE = 1e-3
 
 
+def as_float(value: int | float) -> float:
+    """``value`` as a float; an integer too large for one (TOML integers have any number of
+    digits) is an infinity of its sign, which no key admits."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
+
+
+def shown(value: Any) -> str:
+    """``repr(value)`` for a message, a long one (a 400-digit integer) cut to its start."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
 def _number(path: str, value: Any, key: Key) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
-    x = float(value)
+        raise DesignError(f"{path} must be {key.expected()}; got {shown(value)}")
+    x = as_float(value)
     if not (math.isfinite(x) and key.admits(x)):
-        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+        raise DesignError(f"{path} must be {key.expected()}; got {shown(value)}")
     return x
 
 
 def _vector(path: str, value: Any, key: Key) -> tuple[float, float, float]:
     ok = isinstance(value, list) and len(value) == 3
     ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-    ok = ok and all(math.isfinite(float(v)) and key.admits(float(v)) for v in value)
+    ok = ok and all(math.isfinite(as_float(v)) and key.admits(as_float(v)) for v in value)
     if not ok:
-        raise DesignError(f"{path} must be {key.expected()}; got {value!r}")
+        raise DesignError(f"{path} must be {key.expected()}; got {shown(value)}")
     return (float(value[0]), float(value[1]), float(value[2]))
 
 

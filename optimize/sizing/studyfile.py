@@ -96,6 +96,7 @@ from typing import Any
 
 from design.admissible import WIRE_CLEARANCE
 from design.designfile import DesignError, default_design, load_design, read_input
+from design.designfile.keys import as_float, shown
 from design.model import DEFAULT_EFFECTS, EFFECTS, PRINTED_TIP
 from design.mounting import design_tip_geometry
 from design.records import Design
@@ -317,13 +318,13 @@ def _is_number(value: Any) -> bool:
     return (
         isinstance(value, (int, float))
         and not isinstance(value, bool)
-        and math.isfinite(float(value))
+        and math.isfinite(as_float(value))  # a 400-digit integer is no finite number
     )
 
 
 def _number(path: str, value: Any, low: float, high: float, what: str = "a number") -> float:
     if not _is_number(value) or not low <= float(value) <= high:
-        raise StudyError(f"{path} must be {what} between {low:g} and {high:g}; got {value!r}")
+        raise StudyError(f"{path} must be {what} between {low:g} and {high:g}; got {shown(value)}")
     return float(value)
 
 

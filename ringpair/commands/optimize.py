@@ -21,6 +21,7 @@ from ringpair.options import (
     STUDY,
     UserError,
     base_file,
+    check_study_size,
     console,
     default_out,
     held_run,
@@ -69,6 +70,7 @@ def optimize(
     from ringpair.plots import plot_fronts, plot_workspaces
 
     study = study_from(study_path)
+    check_study_size(study, pareto=not no_pareto)
     if study.pareto and not no_pareto:
         scheduler = scheduler_from(scheduler)
     if workers < 1:

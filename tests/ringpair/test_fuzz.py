@@ -10,7 +10,7 @@ CI runs a fixed, modest set of examples (derandomised, so a failure reproduces);
 
 from __future__ import annotations
 
-from fuzzing import data_cases, design_cases, option_cases, run_case, study_cases
+from fuzzing import data_cases, design_cases, input_cases, option_cases, run_case, study_cases
 from hypothesis import HealthCheck, given, settings
 
 CI = settings(
@@ -47,4 +47,11 @@ def test_measurement_files_keep_the_promises(case):
 @settings(CI, max_examples=40)
 @given(study_cases())
 def test_study_files_keep_the_promises(case):
+    _kept_promises(case)
+
+
+@settings(CI, max_examples=15)
+@given(input_cases())
+def test_hostile_inputs_keep_the_promises(case):
+    # file kinds, deep nesting, integers beyond int64, corners of the design space (issue 55)
     _kept_promises(case)

@@ -44,6 +44,8 @@ BAD_VALUES = [
     ("robot.free_length_mm", -150.0, ["robot.free_length_mm", "> 0", "-150"]),
     # finite but absurd: no robot is 1e308 mm long or as stiff as 1e308 MPa
     ("robot.free_length_mm", 1e308, ["robot.free_length_mm", "<= 10000", "1e+308"]),
+    # an integer no float holds (TOML's have any number of digits): OverflowError before
+    ("robot.free_length_mm", 10**400, ["robot.free_length_mm", "<= 10000", "(401 characters)"]),
     # shorter than the printed tip's rigid offset: no flexible rod left under the rings
     ("robot.free_length_mm", 3.0, ["robot.free_length_mm", "rigid offset", "got 3"]),
     ("robot.wire.youngs_modulus_mpa", 1e308, ["robot.wire.youngs_modulus_mpa", "<= 1e+06"]),

@@ -23,6 +23,7 @@ import io
 import json
 import math
 import os
+import stat
 import tempfile
 import tomllib
 import warnings
@@ -280,6 +281,8 @@ class Case:
 
     args: list[str]
     files: dict[str, str | bytes] = field(default_factory=dict)
+    kinds: dict[str, str] = field(default_factory=dict)
+    """Inputs made as one of :data:`KINDS` rather than written."""
 
 
 FAST = ["--max-configs=60"]
@@ -394,6 +397,109 @@ def study_cases(draw, hostile: bool = True) -> Case:
     )
 
 
+# --- file kinds, nesting, integer extremes, degenerate designs ----------------------------
+
+BIG_INTEGERS = [2**63, -(2**63) - 1, 2**64, 10**20, 12345678901234567890, 10**400, -(10**400)]
+"""Integers TOML holds and neither int64 nor a float does."""
+KINDS = ["fifo", "folder", "dangling link", "empty", "link to a file"]
+"""What an input path may be other than a regular file with content (:func:`run_case`)."""
+DEGENERATE = [
+    ("robot.free_length_mm", [0.5, 4.3, 4.35, 4.36, 4.4, 5.0]),  # the rigid offset, 4.35 mm
+    ("robot.catheter.youngs_modulus_mpa", [1e-6, 1e-3]),
+    ("robot.wire.youngs_modulus_mpa", [1e-6, 1e-3]),
+    ("tip.remanence_t", [0.0, 1e-12]),
+    ("tip.magnet_length_mm", [1e-300, 0.001, 0.02, 100.0]),
+    ("tip.gap_mm", [0.0, 1e-300, 100.0]),
+    ("external_magnet.remanence_t", [0.0, 1.6]),
+    ("external_magnet.center_mm", [[10000.0, 0.0, 0.0], [200.0, 0.0, 0.0], [0.0, 0.0, 150.0]]),
+    ("external_magnet.diameter_mm", [1e-300, 10000.0]),
+]
+"""Corners of the design space: a rod about as long as the printed tip's rigid offset, a
+rod softer than rubber, rings with no moment or no length, a magnet far or at the side."""
+
+
+@st.composite
+def nested_texts(draw) -> str:
+    """TOML nested ``depth`` deep: arrays, inline tables or a dotted table header."""
+    depth = draw(st.sampled_from([2, 50, 1000, 100_000]))
+    form = draw(st.sampled_from(["array", "table", "header"]))
+    if form == "array":
+        return "x = " + "[" * depth + "]" * depth + "\n"
+    if form == "table":
+        return "x = " + "{a = " * depth + "1" + "}" * depth + "\n"
+    return "[" + ".".join(["a"] * min(depth, 5000)) + "]\nb = 1\n"
+
+
+@st.composite
+def degenerate_design_texts(draw) -> str:
+    """The demonstrator at one to three corners of :data:`DEGENERATE`, or with a numeric key
+    set to an integer of :data:`BIG_INTEGERS`."""
+    doc = design_to_dict(default_design())
+    for path, values in draw(st.lists(st.sampled_from(DEGENERATE), min_size=1, max_size=3)):
+        doc = edited(doc, path, draw(st.sampled_from(values)))
+    if draw(st.booleans()):
+        section, key = draw(st.sampled_from(NUMERIC_KEYS))
+        big = draw(st.sampled_from(BIG_INTEGERS))
+        doc = edited(doc, f"{section}.{key.name}", [big, 0, 0] if key.vector else big)
+    return tomli_w.dumps(doc)
+
+
+@st.composite
+def input_cases(draw) -> Case:
+    """Inputs no ordinary file gives: a design, study or data path that is a FIFO, a
+    folder, a dangling link or empty; TOML nested deep; integers beyond int64 and float in
+    design, study and data files and options; designs at the corners of the design space,
+    through show, simulate, workspace, calibrate and optimize."""
+    family = draw(st.sampled_from(["kind", "nested", "integers", "degenerate", "degenerate"]))
+    if family == "kind":
+        command = draw(st.sampled_from(["show", "simulate", "calibrate", "optimize"]))
+        name = {"calibrate": "in/data.csv", "optimize": "in/study.toml"}.get(
+            command, "in/design.toml"
+        )
+        args = {
+            "show": ["show", name],
+            "simulate": ["simulate", name, "--theta1=0", "--effects=none", "--out=out/s.csv"],
+            "calibrate": ["calibrate", name, "--json=out/f.json"],
+            "optimize": ["optimize", name, "--no-pareto", "--out=out/o"],
+        }[command]
+        return Case(args, kinds={name: draw(st.sampled_from(KINDS))})
+    if family == "nested":
+        command = draw(st.sampled_from(["show", "optimize"]))
+        name = "in/design.toml" if command == "show" else "in/study.toml"
+        args = [command, name] + (["--no-pareto", "--out=out/o"] if command == "optimize" else [])
+        return Case(args, {name: draw(nested_texts())})
+    if family == "integers":
+        big = str(draw(st.sampled_from(BIG_INTEGERS)))
+        choice = draw(st.sampled_from(["sequence", "study", "seed", "n", "samples"]))
+        if choice == "sequence":
+            text = f"{','.join(COLUMNS[:6])}\n0,0,150,1,1,0\n90,0,150,2,1,{big}\n"
+            return Case(["calibrate", "in/data.csv", "--json=out/f.json"], {"in/data.csv": text})
+        if choice == "study":
+            doc = edited(tomllib.loads(SMALL), draw(st.sampled_from(STUDY_KEYS)), int(big))
+            return Case(
+                ["optimize", "in/study.toml", "--no-pareto", "--out=out/o"],
+                {"in/study.toml": tomli_w.dumps(doc)},
+            )
+        option = {"seed": "synth", "n": "synth", "samples": "study"}[choice]
+        return Case([option, f"--{choice}={big}", "--out=out/x"])
+    text = draw(degenerate_design_texts())
+    command = draw(st.sampled_from(["show", "simulate", "simulate", "workspace"]))
+    args = {
+        "show": ["show", "in/design.toml"],
+        "simulate": [
+            "simulate",
+            "in/design.toml",
+            "--theta1=0,90,180",
+            f"--effects={draw(st.sampled_from(['none', 'default']))}",
+            "--quiet",
+            "--out=out/s.csv",
+            *FAST,
+        ],
+        "workspace": ["workspace", "in/design.toml", "--step=90", "--effects=none", "--out=out/w"],
+    }[command]
+    return Case(args, {"in/design.toml": text})
+
+
 # --- running a case ----------------------------------------------------------------------
 
 
@@ -411,8 +517,31 @@ def _snapshot(folder: Path) -> dict[str, str]:
     out = {}
     for p in sorted(folder.rglob("*")):
         key = str(p.relative_to(folder))
-        out[key] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
+        info = p.lstat()
+        if stat.S_ISDIR(info.st_mode):
+            out[key] = "dir"
+        elif stat.S_ISREG(info.st_mode):
+            out[key] = hashlib.sha256(p.read_bytes()).hexdigest()
+        else:  # a FIFO or a link: never opened (a FIFO would block)
+            out[key] = (
+                f"special {stat.S_IFMT(info.st_mode)} {os.readlink(p) if p.is_symlink() else ''}"
+            )
     return out
+
+
+def _make(path: Path, kind: str) -> None:
+    """An input of :data:`KINDS` at ``path``."""
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "dangling link":
+        path.symlink_to(path.with_name("nothing-here"))
+    elif kind == "empty":
+        path.write_text("")
+    else:
+        path.with_name("target").write_text("x = 1\n")
+        path.symlink_to("target")
 
 
 def _strict_json(text: str) -> None:
@@ -449,6 +578,8 @@ def run_case(case: Case) -> Outcome:
         for name, content in case.files.items():
             path = work / name
             path.write_bytes(content if isinstance(content, bytes) else content.encode())
+        for name, kind in case.kinds.items():
+            _make(work / name, kind)
         before = _snapshot(work)
         here = os.getcwd()
         os.chdir(work)

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import magpylib as magpy
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import LSODA, solve_ivp
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
@@ -52,6 +52,8 @@ from design.ring_coupling import coupling_coefficient
 from design.stops import STOP_STIFFNESS
 
 MU0 = 4e-7 * np.pi * 1.00000000055  # CODATA 2018 vacuum permeability [T m / A]
+MAGPY_MU0 = magpy.mu_0
+"""The vacuum permeability magpylib converts H to B with. [T m / A]"""
 FD_STEP = 2e-6
 """Central-difference step of the field gradient. [m]"""
 
@@ -167,26 +169,39 @@ def robot(design: Design, printed: bool = False) -> Robot:
     )
 
 
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
 class Field:
     """B at points (k, 3) of the design's field: the external magnet (magpylib's cylinder,
-    or its dipole) and the field sources (magpylib's Cuboid, Sphere, Cylinder and Circle,
-    or for a permanent magnet without ``near_field`` its numpy dipole; a uniform field),
-    superposed (field maps are not modelled here)."""
+    or its dipole) and the field sources (magpylib's cuboid, sphere, axial-cylinder and
+    current-loop kernels, or for a permanent magnet without ``near_field`` its numpy
+    dipole; a uniform field), superposed (field maps are not modelled here).
+
+    The kernels are magpylib's own (``magpylib.core``: the functions its ``Cuboid``,
+    ``Sphere``, ``Cylinder`` and ``Circle`` objects evaluate), called once per source on
+    all points, each in its source's frame (a cylinder's and a coil's axis, a cuboid's
+    sides along the base axes): an object's ``getB`` costs ~1.5 ms of input checks per
+    call, which made the oracle's flows minutes long. :meth:`objects` gives the objects,
+    and the tests check that both agree."""
 
     def __init__(self, design: Design, near: bool) -> None:
         self.near = near
         self.magnets: list[tuple[np.ndarray, np.ndarray]] = []  # (centre, moment) dipoles
-        self.objects: list = []  # magpylib sources
+        self.cylinders: list[tuple] = []  # (centre, axis, radius, half length, remanence)
+        self.cuboids: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # centre, sides, J
+        self.spheres: list[tuple[np.ndarray, float, np.ndarray]] = []  # centre, diameter, J
+        self.coils: list[tuple[np.ndarray, np.ndarray, float, float]] = []  # c, axis, r, NI
         self.uniform = np.zeros(3)
-        self.cylinder = None
         e = design.external_magnet
         if e is not None:
-            axis = np.asarray(e.magnetization, float)
-            axis = axis / np.linalg.norm(axis)
+            axis = _unit(e.magnetization)
             volume = np.pi * e.diameter**2 / 4 * e.length
             if near:
-                self.cylinder = (np.asarray(e.center, float), axis, e.diameter / 2,
-                                 e.length / 2, e.remanence)  # fmt: skip
+                self.cylinders.append((np.asarray(e.center, float), axis, e.diameter / 2,
+                                       e.length / 2, e.remanence))  # fmt: skip
             else:
                 self.magnets.append(
                     (np.asarray(e.center, float), e.remanence / MU0 * volume * axis)
@@ -200,25 +215,14 @@ class Field:
         if src.kind == "uniform":
             self.uniform = self.uniform + np.asarray(src.b, float)
         elif src.kind == "coil":
-            rot, _ = Rotation.align_vectors([src.axis], [[0.0, 0.0, 1.0]])
-            self.objects.append(magpy.current.Circle(
-                current=src.turns * src.current, diameter=2 * src.radius, position=centre,
-                orientation=rot,
-            ))  # fmt: skip
-        elif src.kind == "sphere" or (src.kind in ("cuboid", "cylinder") and self.near):
-            pol = src.remanence * mag
-            if src.kind == "sphere":
-                self.objects.append(magpy.magnet.Sphere(
-                    polarization=pol, diameter=src.diameter, position=centre))  # fmt: skip
-            elif src.kind == "cuboid":
-                self.objects.append(magpy.magnet.Cuboid(
-                    polarization=pol, dimension=src.dimensions, position=centre))  # fmt: skip
-            else:
-                rot, _ = Rotation.align_vectors([mag], [[0.0, 0.0, 1.0]])
-                self.objects.append(magpy.magnet.Cylinder(
-                    polarization=(0, 0, src.remanence), dimension=(src.diameter, src.length),
-                    position=centre, orientation=rot,
-                ))  # fmt: skip
+            self.coils.append((centre, _unit(src.axis), src.radius, src.turns * src.current))
+        elif src.kind == "sphere":  # (exactly its dipole outside, near_field or not)
+            self.spheres.append((centre, src.diameter, src.remanence * mag))
+        elif src.kind == "cuboid" and self.near:
+            self.cuboids.append((centre, np.asarray(src.dimensions, float), src.remanence * mag))
+        elif src.kind == "cylinder" and self.near:
+            self.cylinders.append((centre, _unit(mag), src.diameter / 2, src.length / 2,
+                                   src.remanence))  # fmt: skip
         elif src.kind in ("cuboid", "cylinder"):
             if src.kind == "cuboid":
                 volume = float(np.prod(src.dimensions))
@@ -230,24 +234,61 @@ class Field:
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         points = np.atleast_2d(points)
+        k = len(points)
         out = np.zeros_like(points, dtype=float) + self.uniform
-        if self.cylinder is not None:  # magpylib's kernel (Derby & Olbert 2010)
-            centre, axis, radius, half, remanence = self.cylinder
+        for centre, axis, radius, half, remanence in self.cylinders:  # Derby & Olbert 2010
             d = points - centre
             z = d @ axis
             radial = d - z[:, None] * axis
             rho = np.linalg.norm(radial, axis=1)
             b_rho, _, b_z = magpy.core.magnet_cylinder_axial_Bfield(
-                np.full(len(z), half / radius), rho / radius, z / radius
+                np.full(k, half / radius), rho / radius, z / radius
             )
             unit = radial / np.where(rho > 0, rho, 1.0)[:, None]
             out = out + remanence * (b_rho[:, None] * unit + b_z[:, None] * axis)
+        for centre, sides, pol in self.cuboids:
+            out = out + magpy.core.magnet_cuboid_Bfield(
+                points - centre, np.tile(sides, (k, 1)), np.tile(pol, (k, 1))
+            )
+        for centre, diameter, pol in self.spheres:
+            out = out + magpy.core.magnet_sphere_Bfield(
+                points - centre, np.full(k, diameter), np.tile(pol, (k, 1))
+            )
+        for centre, axis, radius, current in self.coils:
+            d = points - centre
+            z = d @ axis
+            radial = d - z[:, None] * axis
+            rho = np.linalg.norm(radial, axis=1)
+            h_rho, _, h_z = magpy.core.current_circle_Hfield(
+                np.full(k, radius), rho, z, np.full(k, current)
+            )
+            unit = radial / np.where(rho > 0, rho, 1.0)[:, None]
+            out = out + MAGPY_MU0 * (h_rho[:, None] * unit + h_z[:, None] * axis)
         for centre, moment in self.magnets:
             d = points - centre
             r = np.linalg.norm(d, axis=1)[:, None]
             out = out + MU0 / (4 * np.pi) * (3 * d * (d @ moment)[:, None] / r**5 - moment / r**3)
-        for obj in self.objects:
-            out = out + obj.getB(points)
+        return out
+
+    def objects(self) -> list:
+        """magpylib's objects of the sources that :meth:`__call__` evaluates by their
+        kernels (the cylinders, cuboids, spheres and coils), posed by magpylib."""
+        out: list = []
+        for centre, axis, radius, half, remanence in self.cylinders:
+            rot, _ = Rotation.align_vectors([axis], [[0.0, 0.0, 1.0]])
+            out.append(magpy.magnet.Cylinder(
+                polarization=(0, 0, remanence), dimension=(2 * radius, 2 * half),
+                position=centre, orientation=rot,
+            ))  # fmt: skip
+        for centre, sides, pol in self.cuboids:
+            out.append(magpy.magnet.Cuboid(polarization=pol, dimension=sides, position=centre))
+        for centre, diameter, pol in self.spheres:
+            out.append(magpy.magnet.Sphere(polarization=pol, diameter=diameter, position=centre))
+        for centre, axis, radius, current in self.coils:
+            rot, _ = Rotation.align_vectors([axis], [[0.0, 0.0, 1.0]])
+            out.append(magpy.current.Circle(
+                current=current, diameter=2 * radius, position=centre, orientation=rot
+            ))  # fmt: skip
         return out
 
     def with_gradient(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -363,6 +404,33 @@ def _jacobian(fun, x: np.ndarray, step: float = 1e-7) -> np.ndarray:
     return np.column_stack(cols)
 
 
+REST = 1e-9
+"""The flow rests where its largest component is below this ([m] of the rod's end, [rad];
+the residual's own finite-difference noise is ~1e-9)."""
+
+
+def _flow_to_rest(solver: LSODA, touching) -> tuple[np.ndarray, str]:
+    """Step ``solver`` (the flow, from its start) until the flow is below :data:`REST` at
+    a step's end ('rested'), the rings touch a magnet there (``touching`` (y) [m] <= 0:
+    'touching'), or the solver fails ('lost') or reaches its end ('lost', unless the flow
+    is below 1e-7 there: 'rested'). Returns (the state there, status). The steps are LSODA's (those
+    of ``solve_ivp``); where the flow comes to rest within a step is not located (a root
+    search in the step's interpolant cost ~40 evaluations of the field per event, and
+    failed where the event changed sign twice within a step)."""
+    while True:
+        solver.step()
+        y = solver.y
+        if touching(y) <= 0:
+            return y, "touching"
+        size = np.abs(solver.fun(solver.t, y)).max()
+        if size <= REST:
+            return y, "rested"
+        if solver.status == "failed":
+            return y, "lost"
+        if solver.status == "finished":
+            return y, "rested" if size <= 1e-7 else "lost"
+
+
 def linear_state(
     design: Design,
     effects: frozenset[str],
@@ -374,8 +442,8 @@ def linear_state(
     error control (scipy's LSODA, which switches to implicit BDF steps where the flow is
     stiff, so the trajectory is the flow's and does not jump to another equilibrium; Radau
     stalled on some flows) at each step of the load ramp until
-    the residual is below 1e-9, then polished by Newton at full load. r = C grad V with C
-    the compliance (symmetric positive definite), so the flow goes downhill of the
+    the residual is below :data:`REST`, then polished by Newton at full load. r = C grad V
+    with C the compliance (symmetric positive definite), so the flow goes downhill of the
     potential V and rests only in a minimum, where the real robot comes to rest. Returns
     (unknowns (4 or 6,), tip position (3,), the smallest :func:`ring_clearance` at the
     states of the ramp [m]); NaN if the flow is lost."""
@@ -400,30 +468,16 @@ def linear_state(
         def flow(_t, y, lam=lam):
             return -_linear_residual(y, command, rb, field, lam, torsion, gravity)
 
-        def rested(_t, y, lam=lam):
-            return np.log(np.abs(flow(0.0, y, lam)).max() + 1e-300) - np.log(1e-9)
-
-        def touching(_t, y):
+        def touching(y):
             return ring_clearance(design, tip_of(y), tangent_of(y))
 
-        rested.terminal = touching.terminal = True
-        if np.abs(flow(0.0, x)).max() > 1e-9:
+        if np.abs(flow(0.0, x)).max() > REST:
             atol = 1e-10 * np.where(np.arange(x.size) < 2, rb.length, 1.0)  # [m], [rad]
-            sol = solve_ivp(
-                flow,
-                (0.0, 1e6),
-                x,
-                method="LSODA",
-                events=[rested, touching],
-                rtol=1e-6,
-                atol=atol,
-            )
-            x = sol.y[:, -1]
-            clearance = min(clearance, touching(0.0, x))
-            if sol.t_events[1].size:  # the rings reached the magnet (contact: the end)
+            x, status = _flow_to_rest(LSODA(flow, 0.0, x, 1e6, rtol=1e-6, atol=atol), touching)
+            clearance = min(clearance, touching(x))
+            if status == "touching":  # the rings reached the magnet (contact: the end)
                 return nan[0], nan[1], min(clearance, 0.0)
-            # failed, or never came to rest (its own finite-difference noise is ~1e-9)
-            if sol.status < 0 or not np.abs(flow(0.0, x)).max() <= 1e-7:
+            if status != "rested":  # failed, or never came to rest
                 return nan[0], nan[1], clearance
     for _ in range(20):
         r = -flow(0.0, x)
