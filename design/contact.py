@@ -167,7 +167,9 @@ def solve_design_in_contact(
 ) -> tuple[Equilibria, TipStiffness, Contact]:
     """The states of ``design`` for commanded angles [rad] with its obstacles
     (``environment.obstacles``; none: the free states), their tip stiffness (held on the
-    obstacle where the tip presses on one) and their contact."""
+    obstacle where the tip presses on one) and their contact; ``model`` for ``design``'s
+    field (:meth:`RingPairModel.for_design`)."""
+    model = model.for_design(design)
     params = model.parameters(design)
     body = tip_body(design, printed=PRINTED_TIP in model.effects)
     obstacles = list(design.environment.obstacles)

@@ -254,6 +254,27 @@ NAME_BYTES = 200
 the temporary beside it adds a few dozen). [bytes]"""
 
 
+def csv_with_picture(
+    out: Path | None, default: Path, mode: str, picture: str, inputs: list
+) -> tuple[Path, Path]:
+    """The checked CSV path (``out`` or ``default``) and the picture written beside it
+    (.png) for ``mode`` (the option that writes both, e.g. ``--path``); ``picture`` says
+    what the picture is. A name not ending in .csv is refused: the picture's name would be
+    the CSV's."""
+    typed = out is not None
+    out = out or default
+    if out.suffix.lower() != ".csv":
+        raise UserError(
+            f"--out {out}: with {mode}, expected a CSV file name ending in .csv ({picture} "
+            f"is written beside it as .png); got {out.suffix or 'no suffix'!r}"
+        )
+    csv_path, png = (
+        output_path(p, "--out", folder=False, typed=typed, inputs=inputs)
+        for p in (out, out.with_suffix(".png"))
+    )
+    return csv_path, png
+
+
 def output_path(
     path: Path,
     option: str,
@@ -383,22 +404,44 @@ def check_request(
     what: str,
     size: str,
     seconds: float,
-    raise_with: str,
+    raise_with: str | None,
     memory: float | None = None,
 ) -> None:
     """Size a request before any work: refuse (UserError) ``count`` pieces of work above
     ``limit``, saying its ``size`` (text), the time estimate ``seconds`` [s] and, if given,
     the ``memory`` [bytes]; below it, announce on stderr a run estimated above ANNOUNCE
     seconds. ``what`` names the options that asked for it, ``raise_with`` the option that
-    lifts the limit."""
+    lifts the limit (None: none does; the request must be made smaller)."""
     if count <= limit:
         if seconds > ANNOUNCE:
             err_console.print(f"{what}: {size}, about {duration(seconds)}")
         return
     held = f" and {memory / 1e9:.3g} GB of memory" if memory is not None else ""
-    raise UserError(
-        f"{what}: {size}, about {duration(seconds)}{held}; at most {limit:,} unless "
-        f"{raise_with} says more"
+    lift = f"unless {raise_with} says more" if raise_with else "(ask for fewer)"
+    raise UserError(f"{what}: {size}, about {duration(seconds)}{held}; at most {limit:,} {lift}")
+
+
+MAX_NLP_STARTS = 5_000
+"""NLP starts a study may ask for (optimum and Pareto points): hours at
+:data:`optimize.sizing.nlp_designs.START_SECONDS_PER_CONFIGURATION`."""
+
+
+def check_study_size(study: Study, pareto: bool) -> None:
+    """Size a study's NLPs before any work (:func:`check_request`): its starts for the
+    optimum and (``pareto``) every Pareto point, each material pair; the estimate on one
+    worker."""
+    from optimize.sizing.nlp_designs import material_combinations, nlp_seconds, nlp_starts
+
+    n = nlp_starts(study, pareto)
+    points = sum(p.points for p in study.pareto) if pareto else 0
+    check_request(
+        n,
+        MAX_NLP_STARTS,
+        f"study '{study.name}' (solver.starts, pareto points, materials)",
+        f"{n:,} NLP starts ({1 + points} solves x {study.starts} starts x "
+        f"{len(material_combinations(study))} material pairs)",
+        nlp_seconds(study, pareto),
+        None,
     )
 
 
@@ -472,7 +515,23 @@ def study_from(path: Path | None) -> Study:
     from optimize.sizing.studyfile import StudyError, default_study, load_study
 
     with bad_input(StudyError, OSError, UnicodeDecodeError):
-        return default_study() if path is None else load_study(path)
+        study = default_study() if path is None else load_study(path)
+    external_magnet_only(study.base, study.base_source)
+    return study
+
+
+def external_magnet_only(design: Design, source: object) -> None:
+    """UserError (exit 2) where ``design`` (read from ``source``, for the message) has
+    ``[[field.sources]]``: calibration, diagnosis, the study and the design NLP model the
+    ``[external_magnet]`` alone (their parameter vectors are
+    :data:`design.registry.NAMES`); simulate, workspace and steer take the sources."""
+    if design.sources:
+        kinds = ", ".join(s.kind for s in design.sources)
+        raise UserError(
+            f"{source}: [[field.sources]] ({kinds}): calibrate, diagnose, study and optimize "
+            "model the [external_magnet] alone so far; remove the sources for them "
+            "(simulate, workspace and steer take them)"
+        )
 
 
 SCHEDULER_TIMEOUT = 3.0
@@ -526,8 +585,11 @@ def measured_data(data: Path, design: Path | None) -> tuple[Design, Measurements
         )
     with bad_input(MeasurementError, DesignError):
         if data.is_dir():
-            return load_dataset(data)
-        return design_from(design), load_measurements(data)
+            found = load_dataset(data)
+        else:
+            found = design_from(design), load_measurements(data)
+    external_magnet_only(found[0], data / "design.toml" if data.is_dir() else design)
+    return found
 
 
 @contextmanager

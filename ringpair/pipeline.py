@@ -245,7 +245,12 @@ def run_study(
             "Pareto sweeps on Dask",
             key,
             lambda: run_sweeps(
-                study, out / "pareto", scheduler=scheduler, workers=workers, progress=w.count
+                study,
+                out / "pareto",
+                scheduler=scheduler,
+                workers=workers,
+                progress=w.count,
+                start=best.values,
             ),
             w,
         )

@@ -15,8 +15,8 @@ from ringpair.options import (
     UserError,
     check_configurations,
     console,
+    csv_with_picture,
     default_out,
-    output_path,
     progress,
 )
 from ringpair.plots import plot_force_map
@@ -47,16 +47,8 @@ def steer_press(
     step = PRESS_STEP if step_deg is None else step_deg
     grid = int(round(360.0 / step))
     check_configurations(grid**2, max_configs, "--step")
-    typed = out is not None
-    out = out or default_out(d.name, "steer_press.csv")
-    if out.suffix.lower() != ".csv":
-        raise UserError(
-            f"--out {out}: with --press, expected a CSV file name ending in .csv (the force "
-            f"map is written beside it as .png); got {out.suffix or 'no suffix'!r}"
-        )
-    out, picture = (
-        output_path(p, "--out", folder=False, typed=typed, inputs=[design])
-        for p in (out, out.with_suffix(".png"))
+    out, picture = csv_with_picture(
+        out, default_out(d.name, "steer_press.csv"), "--press", "the force map", [design]
     )
     with progress(f"finding the ring angles that press with {wanted_mn:g} mN"):
         result = press(d, model, wanted_mn * 1e-3, np.deg2rad(step))

@@ -45,6 +45,7 @@ from ringpair.report_results import number_text, results
 from ringpair.tables import (
     TIGHT,
     check_rows,
+    check_value_text,
 )
 
 OBJECTIVE_WORDS = {
@@ -336,8 +337,8 @@ def _parts_section(run: Run) -> str:
             [
                 c.get("item", ""),
                 c.get("check", ""),
-                _cell(c.get("value")),
-                c.get("unit", ""),
+                check_value_text(c.get("value"), str(c.get("unit", ""))),
+                "%" if c.get("unit") in ("relative", "fraction") else c.get("unit", ""),
                 c.get("limit", ""),
                 "pass" if c.get("passed") else "FAIL",
                 c.get("note", ""),
@@ -359,14 +360,6 @@ def _parts_section(run: Run) -> str:
 {tight}
 {details(f"the other {len(rest)} checks, all passed", table(header, rows(rest)))}
 {bom_section(cad)}"""
-
-
-def _cell(v: Any) -> str:
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, int | float | np.floating):
-        return f"{float(v):.4g}"
-    return str(v)
 
 
 STYLE = """body{font-family:sans-serif;max-width:1200px;margin:0.6em auto;color:#222;

@@ -416,3 +416,26 @@ def check_rows(checks: list[dict[str, Any]]) -> tuple[list[dict], list[dict]]:
             tight = margin < TIGHT * max(abs(limit), 1e-9)
         (shown if tight or not c.get("passed", True) else rest).append(c)
     return shown, rest
+
+
+CHECK_DECIMALS = {"mm": 3, "deg": 2}
+"""Decimals a CAD check's value is shown with, by unit: a micrometre, a hundredth of a
+degree (the checks' own tolerances are coarser)."""
+
+
+def check_value_text(value: Any, unit: str) -> str:
+    """A CAD check's value for the page, without raw exponents: lengths to the micrometre,
+    angles to 0.01 deg, relative differences and fractions in percent, counts as integers;
+    a value that is not a finite number says so."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if not isinstance(value, int | float | np.floating) or not math.isfinite(float(value)):
+        return "not measured"
+    v = float(value)
+    if unit in CHECK_DECIMALS:
+        return f"{v:.{CHECK_DECIMALS[unit]}f}"
+    if unit in ("relative", "fraction"):
+        return f"{100 * v:.2f} %"
+    if v == round(v):
+        return str(int(round(v)))
+    return f"{v:.4f}"

@@ -62,13 +62,14 @@ def solve_design(
     ordered: bool = False,
     multistable: bool = False,
 ) -> Equilibria:
-    """The states of ``design`` (baseline model unless given) for commanded angles. [rad]
+    """The states of ``design`` (baseline model unless given, for ``design``'s field:
+    :meth:`RingPairModel.for_design`) for commanded angles. [rad]
 
     ordered : follow the commands as a path (:func:`solve_sequence`) instead of solving
         each on its own; required for ``hysteresis`` and to see snap-through along a path.
     multistable : look for other stable states (configurations on their own only).
     """
-    model = model or RingPairModel()
+    model = (model or RingPairModel()).for_design(design)
     if ordered:
         return solve_sequence(model, model.parameters(design), theta1, theta2)
     return solve_equilibria(

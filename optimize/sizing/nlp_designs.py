@@ -82,6 +82,25 @@ def material_combinations(study: Study) -> list[tuple[Material | None, Material 
     return list(itertools.product(cat, wire))
 
 
+START_SECONDS_PER_CONFIGURATION = 0.1
+"""Time of one NLP start per configuration it samples (``configurations`` plus twice
+``neutral_configurations``): the small test study's starts (40 configurations) took 1 to
+3 s on the development machine (2 cores, shared). [s]"""
+
+
+def nlp_starts(study: Study, pareto: bool = True) -> int:
+    """NLP starts a study solves: every start of every material pair, for the optimum and,
+    with ``pareto``, for every point of its Pareto sweeps."""
+    points = sum(p.points for p in study.pareto) if pareto else 0
+    return (1 + points) * study.starts * len(material_combinations(study))
+
+
+def nlp_seconds(study: Study, pareto: bool = True) -> float:
+    """Estimated time of :func:`nlp_starts`, one worker. [s]"""
+    sampled = study.configurations + 2 * study.neutral_configurations
+    return nlp_starts(study, pareto) * sampled * START_SECONDS_PER_CONFIGURATION
+
+
 def _strain_limits(
     study: Study, cat: Material | None, wire: Material | None
 ) -> tuple[float, float]:

@@ -2,9 +2,13 @@
 
 Each point of a sweep bounds one quantity (catheter outer diameter and magnet volume from
 above, external-magnet distance from below, :data:`optimize.sizing.studyfile.PARETO_QUANTITIES`) and
-maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points are
-independent, so they run as Dask tasks: on a local cluster (processes, one thread each)
-by default, or on an existing cluster given its scheduler address. Each finished point
+maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points run as Dask
+tasks: on a local cluster (processes, one thread each) by default, or on an existing
+cluster given its scheduler address. By default each sweep is a continuation in its
+bound: its loosest point starts from the study's optimum (when given), each further
+point from its neighbour's design (:func:`run_sweeps`), so the sweeps are three chains
+of tasks the workers share; ``continuation=False`` solves every point from the study's
+own starts (the cold path, the baseline of ``benchmarks/study.py``). Each finished point
 is stored under ``out_dir/points/`` (:mod:`design.stored`: JSON and NPZ, never code) keyed
 by a hash of the study, the point and the code, so a rerun of the same inputs skips what
 is already solved (a foreign, truncated or altered file is solved again, with a warning);
@@ -19,9 +23,10 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -81,19 +86,45 @@ def code_digest() -> str:
     return stored.source_digest(PACKAGES, "ringpair")
 
 
-def point_key(study: Study, against: str, epsilon: float) -> str:
+def point_key(study: Study, against: str, epsilon: float, how: tuple[object, ...] = ()) -> str:
     """Identity of one point's inputs: the study (every field, the resolved base design
-    included), the bound and the code (:func:`code_digest`). [-]"""
-    return stored.digest(study, against, round(float(epsilon), 15), code_digest())
+    included), the bound, the code (:func:`code_digest`) and how its start is chosen
+    (``how``: empty for the study's own starts). [-]"""
+    return stored.digest(study, against, round(float(epsilon), 15), code_digest(), *how)
 
 
 def _solve_point(
-    study: Study, against: str, epsilon: float
+    study: Study,
+    against: str,
+    epsilon: float,
+    start: Mapping[str, float] | None = None,
+    previous: tuple[OptimizationResult | None, str] | None = None,
 ) -> tuple[OptimizationResult | None, str]:
+    """One point: (result, '') or (None, why it raised). With ``previous`` (the
+    neighbour's answer, looser bound) or ``start`` (free quantities, SI), the NLP starts
+    from the neighbour's design if it was feasible, else from ``start``; if that finds no
+    feasible design the point is solved again from the study's own starts (which alone
+    look for the conflicting constraints), so a warm start never loses a point the cold
+    path finds."""
     try:
+        if previous is not None and previous[0] is not None and previous[0].feasible:
+            start = previous[0].values
+        if start is not None:
+            warm = optimize_design(
+                study, epsilon={against: epsilon}, starts=[start], conflicts=False
+            )
+            if warm.feasible:
+                return warm, ""
         return optimize_design(study, epsilon={against: epsilon}), ""
     except Exception as exc:  # a failed point is an answer, not the end of the sweep
         return None, f"{type(exc).__name__}: {exc}"
+
+
+def _loose_first(against: str, values: np.ndarray) -> list[float]:
+    """A sweep's bounds from the loosest to the tightest: upper bounds (diameter, volume)
+    from the largest, the distance's lower bound from the smallest. [SI]"""
+    ordered = [float(e) for e in np.sort(values)]
+    return ordered if against == "external_distance" else ordered[::-1]
 
 
 def _store(path: Path, point: ParetoPoint, key: str) -> None:
@@ -122,21 +153,35 @@ def run_sweeps(
     scheduler: str | None = None,
     workers: int = 2,
     progress: Progress | None = None,
+    start: Mapping[str, float] | None = None,
+    continuation: bool = True,
 ) -> ParetoResult:
     """Solve every Pareto sweep of ``study`` (``study.pareto``), resuming from ``out_dir``.
 
     scheduler : address of a running Dask scheduler (e.g. ``tcp://host:8786``); None starts
         a local cluster of ``workers`` processes for the duration of the call.
     progress : called with (points done, points in all).
+    start : free quantities (SI, by name) of the study's optimum
+        (:attr:`OptimizationResult.values`): each sweep's loosest point starts there
+        (None: from the study's own starts).
+    continuation : each further point starts from its neighbour's design, the one with
+        the next looser bound (:func:`_solve_point`; a point the warm start finds
+        infeasible is solved again cold). False: every point from the study's own starts,
+        independent (the cold path; ``start`` unused).
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
     t0 = time.perf_counter()
     store = Path(out_dir) / POINTS
+    how: tuple[object, ...] = ()
+    if continuation:
+        how = ("continuation", sorted((k, round(float(v), 15)) for k, v in (start or {}).items()))
+    else:
+        start = None
     keys = {
-        (s.against, float(e)): point_key(study, s.against, e)
+        (s.against, e): point_key(study, s.against, e, how)
         for s in study.pareto
-        for e in pareto_values(study, s)
+        for e in _loose_first(s.against, pareto_values(study, s))
     }
     plan = [(a, e, store / f"{k[:24]}.npz") for (a, e), k in keys.items()]
     done: dict[Path, ParetoPoint] = {}
@@ -168,10 +213,17 @@ def run_sweeps(
                 used = len(client.scheduler_info()["workers"])
                 if cluster is not None:  # our workers die with this process (kill -9)
                     client.run(die_with_parent, os.getpid())
-                futures = {
-                    client.submit(_solve_point, study, a, e, pure=False): (a, e, p)
-                    for a, e, p in todo
-                }
+                futures = {}
+                previous: Any = None  # the neighbour's answer, or its future
+                for i, (a, e, p) in enumerate(plan):
+                    if i and a != plan[i - 1][0]:
+                        previous = None  # a new sweep
+                    if p in done:
+                        previous = (done[p].result, done[p].error) if continuation else None
+                        continue
+                    future = client.submit(_solve_point, study, a, e, start, previous, pure=False)
+                    futures[future] = (a, e, p)
+                    previous = future if continuation else None
                 for future in as_completed(futures):
                     a, e, path = futures[future]
                     result, error = future.result()
@@ -183,7 +235,10 @@ def run_sweeps(
         finally:
             if cluster is not None:
                 cluster.close()
-    sweeps = {s.against: tuple(done[p] for a, _, p in plan if a == s.against) for s in study.pareto}
+    sweeps = {
+        s.against: tuple(done[p] for _, p in sorted((e, p) for a, e, p in plan if a == s.against))
+        for s in study.pareto
+    }
     return ParetoResult(sweeps, len(todo), resumed, time.perf_counter() - t0, used)
 
 

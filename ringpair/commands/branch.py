@@ -54,7 +54,7 @@ def branch(
     from ringpair.plots import plot_branch_diagram
 
     d = design_from(design)
-    model = model_from(effects)
+    model = model_from(effects).for_design(d)
     command = np.deg2rad([one_angle(theta1, "--theta1"), one_angle(theta2, "--theta2")])
     lam = np.linspace(0.0, 1.0, points)
     typed = out is not None

@@ -102,6 +102,7 @@ def diagnose(
     causes with their evidence and the fitted physical parameters. Each stage is printed
     on stderr as it starts, with the time so far.
     """
+    from optimize.fitting.calibrate import EFFECT_FREE
     from optimize.fitting.diagnose import diagnose as run_diagnosis
     from optimize.fitting.workers import WORKERS_VARIABLE, worker_count
     from ringpair.diagnosis_report import write_report
@@ -143,7 +144,10 @@ def diagnose(
             err_console.print(f"{time.perf_counter() - t0:6.1f} s {stage}", style="dim")
 
         try:
-            result = run_diagnosis(d, m, k=folds, seed=seed, progress=say, priors=priors)
+            # Tips beyond the robot's reach are not this robot's (units, another set-up):
+            # no effect can bring its tip there, so none is searched.
+            searched = () if notes else tuple(EFFECT_FREE)
+            result = run_diagnosis(d, m, searched, k=folds, seed=seed, progress=say, priors=priors)
         except (ArithmeticError, RuntimeError, np.linalg.LinAlgError) as exc:
             # the calibrated baseline could not be fitted (a candidate's failure is in
             # the result): one message, exit 1
@@ -177,14 +181,20 @@ def diagnose(
             _number(row["bic_change"], "+.1f"),
             row["verdict"],
         )
-    console.print(tried)
+    if doc["candidates"]:
+        console.print(tried)
     for cause in result.causes:
         console.print(f"cause {cause.evidence}")
     for name, power in result.power.items():
         console.print(f"power of the data for {name}: {power['note']}")
     for name, fit in fits:
         console.print(f"{name}: {_pulls(fit.calibration)}")
-    if not result.causes:
+    if not result.causes and notes:
+        console.print(
+            "causes: [] (no effect searched: the measured tips lie beyond the robot's "
+            "reach, which no effect changes; see the warning)"
+        )
+    elif not result.causes:
         console.print(
             "causes: [] (the model does not explain the data either: see the warning)"
             if missed

@@ -21,6 +21,7 @@ from ringpair.options import (
     STUDY,
     UserError,
     base_file,
+    check_study_size,
     console,
     default_out,
     held_run,
@@ -69,6 +70,7 @@ def optimize(
     from ringpair.plots import plot_fronts, plot_workspaces
 
     study = study_from(study_path)
+    check_study_size(study, pareto=not no_pareto)
     if study.pareto and not no_pareto:
         scheduler = scheduler_from(scheduler)
     if workers < 1:
@@ -110,7 +112,7 @@ def optimize(
                 )
         pareto = None
         if study.pareto and not no_pareto:
-            pareto = _run_sweeps(study, out, scheduler, workers)
+            pareto = _run_sweeps(study, out, scheduler, workers, best.values)
             written += write_pareto_csvs(pareto, study, out)
             plot_fronts(pareto, best, study, out / "pareto.png")
             written.append(out / "pareto.png")
@@ -126,8 +128,11 @@ def optimize(
     console.print(f"wrote {out / 'manifest.json'}")
 
 
-def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) -> ParetoResult:
-    """The study's Pareto sweeps on Dask, with a progress bar."""
+def _run_sweeps(
+    study: Study, out: Path, scheduler: str | None, workers: int, start: dict[str, float]
+) -> ParetoResult:
+    """The study's Pareto sweeps on Dask, with a progress bar, each sweep continued from
+    the optimum's free quantities ``start`` (SI)."""
     from optimize.sizing.pareto import run_sweeps
 
     with progress("Pareto points") as update:
@@ -135,7 +140,9 @@ def _run_sweeps(study: Study, out: Path, scheduler: str | None, workers: int) ->
         def step(done: int, n: int) -> None:
             update(completed=done, total=n)
 
-        return run_sweeps(study, out, scheduler=scheduler, workers=workers, progress=step)
+        return run_sweeps(
+            study, out, scheduler=scheduler, workers=workers, progress=step, start=start
+        )
 
 
 def summary(

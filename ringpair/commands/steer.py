@@ -34,6 +34,7 @@ from ringpair.options import (
     UserError,
     check_request,
     console,
+    csv_with_picture,
     default_out,
     design_from,
     effects_option,
@@ -405,17 +406,8 @@ def _steer_path(
     if csv_path is None and closed:
         raise UserError("--closed is for a CSV path (circles and ellipses are closed already)")
     center = parse_target(center_text, "--center") if center_text is not None else None
-    typed = out is not None
-    out = out or default_out(d.name, "steer_path.csv")
-    if out.suffix.lower() != ".csv":
-        # the plot goes beside the CSV with .png: any other name would put both in one file
-        raise UserError(
-            f"--out {out}: with --path, expected a CSV file name ending in .csv (the plot is "
-            f"written beside it as .png); got {out.suffix or 'no suffix'!r}"
-        )
-    out, picture = (
-        output_path(p, "--out", folder=False, typed=typed, inputs=[design, csv_path])
-        for p in (out, out.with_suffix(".png"))
+    out, picture = csv_with_picture(
+        out, default_out(d.name, "steer_path.csv"), "--path", "the plot", [design, csv_path]
     )
     params = model.parameters(d)
     schedule: PathSchedule | None = None

@@ -37,6 +37,7 @@ from ringpair.options import (
     UserError,
     bad_input,
     base_file,
+    check_study_size,
     console,
     default_out,
     duration,
@@ -185,6 +186,7 @@ def study(
     with bad_input(OSError, UnicodeDecodeError):
         text = read_regular(study_path) if study_path else ""
     s = study_from(study_path)
+    check_study_size(s, pareto=True)
     if data is not None and not (data / "measurements.csv").is_file():
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
     from ringpair.pipeline import TOLERANCE_LOOP

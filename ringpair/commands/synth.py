@@ -8,7 +8,10 @@ import click
 import numpy as np
 from rich.table import Table
 
+from design.admissible import admits
 from design.geometry import rest_position
+from design.mounting import design_tip_geometry
+from design.records import Design
 from design.registry import PARAMETERS, current, file_unit
 from design.suggest import did_you_mean
 from design.units import MM
@@ -60,6 +63,20 @@ def _overrides(items: tuple[str, ...]) -> dict[str, float]:
             )
         out[name] = value * size
     return out
+
+
+def _check_rod(design: Design, truth: dict[str, float]) -> None:
+    """A true free length (--set) must leave a flexible rod under the printed tip, as the
+    design file's must (:data:`design.admissible.RULES`, ``rod_length``)."""
+    if "free_length" not in truth:
+        return
+    tip = design_tip_geometry(design)
+    if not admits("rod_length", {"rod_length": tip.rod_length(truth["free_length"])}):
+        raise UserError(
+            "--set free_length must be longer than the printed tip's rigid offset "
+            f"({tip.rigid_offset / MM:.4g} mm) so a flexible rod remains; got "
+            f"{truth['free_length'] / MM:g}"
+        )
 
 
 def _plausible(name: str) -> tuple[float | None, float | None, bool]:
@@ -162,6 +179,7 @@ def synth(
     d = design_from(design)
     model = model_from(effects)
     truth = _overrides(settings)
+    _check_rod(d, truth)
     typed = out is not None
     out = output_path(
         out or default_out(d.name, "synth"),

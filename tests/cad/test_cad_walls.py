@@ -5,8 +5,8 @@ known in closed form: a tube (its radial wall), a slab (its thickness) and a wed
 than :data:`cad.checks.KNIFE_ANGLE_DEG` (its thickness falls to nothing at the edge, so
 the check must find a wall far below the limit), while a box's 90 deg corners are no wall.
 Then the tip pieces, drawn from the whole range of mountings the design file accepts
-(process, wall, fits, stop angle, groove range; seeds printed), have no wall under their
-process minimum: the helical grooves end a wall short of every face.
+(process, wall, fits, stop angle, groove range) about drawn rings (seeds printed), have no
+wall under their process minimum: the helical grooves end a wall short of every face.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from design.mounting import MAX_STOP_ANGLE
 from design.process import PROCESSES
 from design.records import Design, Mounting
 
-SEEDS = (5201, 5202, 5203)
+SEEDS = (5201, 5202, 5203, 5204)
 
 
 def _mesh(solid: cq.Shape, tolerance: float = 0.01) -> trimesh.Trimesh:
@@ -73,8 +73,20 @@ def test_drawn_tip_pieces_have_no_wall_under_the_process_minimum(
         stop_angle=float(rng.uniform(math.radians(10.0), MAX_STOP_ANGLE)),
     )
     spec = MountingSpec(groove_range_deg=float(rng.uniform(180.0, 360.0)))
-    print(f"seed {seed}: {mounting}, groove range {spec.groove_range_deg:.1f} deg")
-    design = replace(demonstrator, tip=replace(demonstrator.tip, mounting=mounting))
+    tip = demonstrator.tip
+    # rings from the demonstrator's size to twice as wide, from a third as long to twice
+    scale_d, scale_l = rng.uniform(1.0, 2.0), rng.uniform(1 / 3, 2.0)
+    tip = replace(
+        tip,
+        mounting=mounting,
+        magnet_outer_diameter=tip.magnet_outer_diameter * scale_d,
+        magnet_length=tip.magnet_length * scale_l,
+    )
+    print(
+        f"seed {seed}: {mounting}, ring outer diameter x {scale_d:.2f}, length x "
+        f"{scale_l:.2f}, groove range {spec.groove_range_deg:.1f} deg"
+    )
+    design = replace(demonstrator, tip=tip)
     pieces = build_mounting_pieces(design, None, spec)
     limit = pieces.process.min_wall_mm
     for name, solid in (("proximal", pieces.proximal), ("distal", pieces.distal)):

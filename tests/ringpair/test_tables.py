@@ -50,3 +50,25 @@ def test_check_rows_show_failures_and_tight_margins_and_collapse_the_rest():
     shown, rest = tables.check_rows(checks)
     assert [c["item"] for c in shown] == ["b", "c", "e"]  # within 10 % of the limit, or failed
     assert [c["item"] for c in rest] == ["a", "d", "f"]
+
+
+def test_check_values_read_without_raw_exponents():
+    # Issue 52: the page showed values such as 8.4e-12 and 2e-05; every unit the CAD checks
+    # use is written in fixed digits (or percent), and no value reads as an exponent.
+    cases = {
+        (1.23456e-05, "mm"): "0.000",
+        (0.49857, "mm"): "0.499",
+        (-0.0312, "mm"): "-0.031",
+        (89.99999, "deg"): "90.00",
+        (8.4e-12, "relative"): "0.00 %",
+        (0.0123, "fraction"): "1.23 %",
+        (30.0, ""): "30",
+        (float("nan"), "mm"): "not measured",
+        (None, "mm"): "not measured",
+    }
+    for (value, unit), text in cases.items():
+        assert tables.check_value_text(value, unit) == text, (value, unit)
+    rng = np.random.default_rng(52)
+    for value in 10.0 ** rng.uniform(-15, 3, 200) * rng.choice([-1, 1], 200):
+        for unit in ("mm", "deg", "relative", "fraction", "", "mm^3"):
+            assert "e" not in tables.check_value_text(float(value), unit), (value, unit)

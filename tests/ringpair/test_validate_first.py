@@ -43,6 +43,7 @@ def one_message(result, *words):
             ("steer", "--to", "1,1", "--to", "2,2", "--to", "1,2", "--max-targets", "2"),
             ["--to: 3 targets, about", "at most 2 unless --max-targets"],
         ),
+        (("synth", "--set", "free_length=3"), ["--set free_length", "rigid offset", "got 3"]),
     ],
     ids=[
         "study seed -1",
@@ -52,6 +53,7 @@ def one_message(result, *words):
         "effects ,,",
         "samples",
         "steer targets",
+        "synth rod",
     ],
 )
 def test_bad_options_are_one_message(tmp_path, run, monkeypatch, args, words):
@@ -150,3 +152,16 @@ def test_an_acquisition_number_beyond_int64_is_one_message(tmp_path, run, number
     result = run("calibrate", str(data), "--json", str(tmp_path / "fit.json"))
     one_message(result, str(data), "line 3", "column sequence", "non-negative integer")
     assert not (tmp_path / "fit.json").exists()
+
+
+@pytest.mark.parametrize("command", ["optimize", "study"])
+def test_a_study_too_big_to_solve_is_sized_before_any_work(tmp_path, run, command):
+    # 1,001 solves (the optimum and 1,000 Pareto points) x 100 starts: days of NLPs
+    big = SMALL.replace("starts = 2", "starts = 100")
+    (tmp_path / "s.toml").write_text(
+        big + '[[pareto]]\nagainst = "external_distance"\npoints = 1000\n'
+    )
+    out = tmp_path / "out"
+    result = run(command, str(tmp_path / "s.toml"), "--out", str(out))
+    one_message(result, "100,100 NLP starts", "100 starts", "days", "at most 5,000")
+    assert not out.exists()

@@ -306,6 +306,7 @@ def optimize_design(
     *,
     epsilon: Mapping[str, float] | None = None,
     starts: Sequence[Mapping[str, float]] | None = None,
+    conflicts: bool = True,
 ) -> OptimizationResult:
     """Solve the study's design NLP from several starts; return the best accepted design.
 
@@ -313,6 +314,8 @@ def optimize_design(
         and ``magnet_volume`` bounded above, ``external_distance`` below). [SI: m, m^3]
     starts : explicit start points (free quantities by name, SI; missing ones from the
         base design) instead of the study's seeded ones.
+    conflicts : when no start is accepted, solve the minimum-violation problem (False:
+        skip it, ``conflicts`` empty; for a trial whose infeasible answer is discarded).
     Every material combination is solved from every start. If no start is accepted the
     result is infeasible and ``conflicts`` lists the constraint groups that stay violated
     at the least-violating design (or is empty if the starts failed for another reason).
@@ -376,7 +379,7 @@ def optimize_design(
         conflicts: tuple[Conflict, ...] = ()
         limiting: tuple[str, ...] = ()
         best_total = math.inf
-        for cat, wire in combos:
+        for cat, wire in combos if conflicts else ():
             try:
                 total, found, bounds_ = _conflicts(study, points[0], cat, wire, epsilon, norms)
             except Exception:  # noqa: BLE001 - report what the starts said
