@@ -15,6 +15,7 @@ from field_sources import (
     clear,
     draw_source,
     evaluate,
+    extent,
     magpylib_source,
     outside_points,
     richardson_gradient,
@@ -113,20 +114,24 @@ def test_helmholtz_pair_is_uniform_at_its_centre_and_superposes_like_magpylib():
 
 
 # magpylib's Collection superposes its children: the sum of ringpair's kernels over a
-# drawn set of mixed sources matches it.
+# drawn set of mixed sources matches it. To 1e-5, not the 1e-8 of one source near it: far
+# from a small magnet the closed forms (magpylib's and ours alike) lose digits by
+# cancellation (a 0.5 mm cuboid: 5e-6 of its own field at 1000 sizes, 2e-4 at 3000 against
+# its exact far field, the dipole's plus (a/r)^2); 300 drawn sets at these distances: at
+# most 9.7e-7.
 def test_superposition_of_drawn_sources_matches_magpylib_collection():
     print(f"seed {SEED}")
     rng = np.random.default_rng([SEED, 99])
     kinds = rng.choice(["cuboid", "sphere", "coil", "cylinder"], 5)
     sources = [(k, draw_source(k, rng)) for k in kinds]
-    far = max(np.linalg.norm(q["center"]) for _, q in sources) + 1.0
+    far = max(np.linalg.norm(q["center"]) + extent(k, q) for k, q in sources) + 0.05
     direction = rng.normal(size=(200, 3))
     points = (
         direction / np.linalg.norm(direction, axis=1)[:, None] * rng.uniform(far, 3 * far, (200, 1))
     )
     total = sum(evaluate(k, q, points)[0] for k, q in sources)
     collection = magpy.Collection(*(magpylib_source(k, q) for k, q in sources))
-    assert relative(total, collection.getB(points), 1).max() < 1e-8
+    assert relative(total, collection.getB(points), 1).max() < 1e-5
 
 
 # Off the near field a permanent magnet is its point dipole m = Br V / mu0 (which the
