@@ -376,7 +376,7 @@ def optimize_design(
             a.start = replace(a.start, objective=a.metrics[CONTROLLABLE])
     start_results = tuple(a.start for a in attempts)
     if not accepted:
-        conflicts: tuple[Conflict, ...] = ()
+        violated: tuple[Conflict, ...] = ()
         limiting: tuple[str, ...] = ()
         best_total = math.inf
         for cat, wire in combos if conflicts else ():
@@ -385,7 +385,7 @@ def optimize_design(
             except Exception:  # noqa: BLE001 - report what the starts said
                 continue
             if total < best_total:
-                best_total, conflicts, limiting = total, found, bounds_
+                best_total, violated, limiting = total, found, bounds_
         return OptimizationResult(
             study=study.name,
             feasible=False,
@@ -398,7 +398,7 @@ def optimize_design(
             constraints=(),
             active=(),
             starts=start_results,
-            conflicts=conflicts,
+            conflicts=violated,
             limiting_bounds=limiting,
             epsilon=dict(epsilon or {}),
             seconds=time.perf_counter() - t0,
