@@ -186,6 +186,7 @@ def study(
     with bad_input(OSError, UnicodeDecodeError):
         text = read_regular(study_path) if study_path else ""
     s = study_from(study_path)
+    process = _process(process)  # every option checked before the size is announced
     check_study_size(s, pareto=True)
     if data is not None and not (data / "measurements.csv").is_file():
         raise UserError(f"--data: {data} is not a data set (expected {data}/measurements.csv)")
@@ -203,7 +204,6 @@ def study(
             f"--samples: {samples:,} samples x {TOLERANCE_LOOP} configurations, about "
             f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} in the tolerance stage"
         )
-    process = _process(process)
     if s.pareto:
         scheduler = scheduler_from(scheduler)
     out = output_path(
