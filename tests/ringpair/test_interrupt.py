@@ -18,6 +18,8 @@ import zipfile
 
 import pytest
 
+from ringpair.runs import LOCK, MANIFEST
+
 pytestmark = pytest.mark.slow
 
 
@@ -59,6 +61,8 @@ def files(folder, skip=()) -> dict[str, object]:
                 return {name: z.read(name) for name in z.namelist()}
         return path.read_bytes()
 
+    # The run folder's lock and manifest (ringpair.runs) name the process and its start.
+    skip = {*skip, LOCK, MANIFEST}
     return {
         str(p.relative_to(folder)): content(p)
         for p in sorted(folder.rglob("*"))
