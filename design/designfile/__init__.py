@@ -29,7 +29,13 @@ from design.designfile.keys import (
     DesignError,
     Key,
 )
-from design.designfile.reader import default_design, design_from_dict, load_design, loads_design
+from design.designfile.reader import (
+    default_design,
+    design_from_dict,
+    load_design,
+    loads_design,
+    revalidated,
+)
 from design.designfile.writer import design_to_dict, dumps_design, save_design
 
 __all__ = [
@@ -51,6 +57,7 @@ __all__ = [
     "loads_design",
     "read_input",
     "read_regular",
+    "revalidated",
     "save_design",
     "source_distance",
 ]

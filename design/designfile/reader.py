@@ -15,6 +15,7 @@ from design.designfile.environment import _obstacles
 from design.designfile.fields import _external_magnet, _sources
 from design.designfile.inputs import read_input
 from design.designfile.keys import TOP_KEYS, DesignError, _section
+from design.designfile.writer import design_to_dict
 from design.process import DEFAULT_PROCESS, PROCESSES
 from design.records import Design, Environment, Mounting, Robot, Tip, Tube
 from design.registry import PARAMETERS
@@ -113,6 +114,13 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
     _check_clearance(design)
     _check_obstacles(design)
     return design
+
+
+def revalidated(design: Design) -> Design:
+    """``design`` through every check a design file passes (written out and read back):
+    for a record built in code, e.g. a design with parameters set (``ringpair synth
+    --set``). DesignError names the file key at fault."""
+    return design_from_dict(design_to_dict(design, explicit=True))
 
 
 def _mounting(doc: dict[str, Any]) -> Mounting:

@@ -8,11 +8,10 @@ import click
 import numpy as np
 from rich.table import Table
 
-from design.admissible import admits
+from design.designfile import DesignError, revalidated
 from design.geometry import rest_position
-from design.mounting import design_tip_geometry
 from design.records import Design
-from design.registry import PARAMETERS, current, file_unit
+from design.registry import PARAMETERS, current, design_with, file_unit
 from design.suggest import did_you_mean
 from design.units import MM
 from ringpair.options import (
@@ -58,25 +57,25 @@ def _overrides(items: tuple[str, ...]) -> dict[str, float]:
         if too_low or (high is not None and value > high):
             bounds = [f"{'>' if low_open else '>='} {low:g}"] * (low is not None)
             bounds += [f"<= {high:g}"] * (high is not None)
-            raise UserError(
-                f"--set {name} must be {' and '.join(bounds)} [{unit}]; got {text.strip()!r}"
-            )
+            raise UserError(f"--set {name} must be {' and '.join(bounds)} [{unit}]; got {value:g}")
         out[name] = value * size
     return out
 
 
-def _check_rod(design: Design, truth: dict[str, float]) -> None:
-    """A true free length (--set) must leave a flexible rod under the printed tip, as the
-    design file's must (:data:`design.admissible.RULES`, ``rod_length``)."""
-    if "free_length" not in truth:
+def _check_truth(design: Design, truth: dict[str, float]) -> None:
+    """The true robot (``design`` with the --set quantities a design holds) must pass every
+    check a design file passes (:func:`design.designfile.revalidated`): walls, bores, a
+    flexible rod under the printed tip, a magnet clear of the robot."""
+    held = {k: v for k, v in truth.items() if PARAMETERS[k].field is not None}
+    if not held:
         return
-    tip = design_tip_geometry(design)
-    if not admits("rod_length", {"rod_length": tip.rod_length(truth["free_length"])}):
+    try:
+        revalidated(design_with(design, held))
+    except DesignError as exc:
+        given = ", ".join(f"{k}={v / file_unit(k)[1]:g}" for k, v in held.items())
         raise UserError(
-            "--set free_length must be longer than the printed tip's rigid offset "
-            f"({tip.rigid_offset / MM:.4g} mm) so a flexible rod remains; got "
-            f"{truth['free_length'] / MM:g}"
-        )
+            f"--set {given}: the true robot is not one a design admits: {exc}"
+        ) from None
 
 
 def _plausible(name: str) -> tuple[float | None, float | None, bool]:
@@ -179,7 +178,7 @@ def synth(
     d = design_from(design)
     model = model_from(effects)
     truth = _overrides(settings)
-    _check_rod(d, truth)
+    _check_truth(d, truth)
     typed = out is not None
     out = output_path(
         out or default_out(d.name, "synth"),

@@ -135,3 +135,39 @@ def test_calibrate_fits_torsion_from_stiff_and_soft_transmissions_too(tmp_path):
     assert doc["rmse_mm"] <= 1.3 * case.noise_mm * np.sqrt(axes), why
     assert starts["nominal"] > 3 * doc["rmse_mm"], why  # the set shows what the starts are for
     assert "best of 3 fits" in result.output
+
+
+def _settable(key: str, value) -> str | None:
+    """The ``--set`` item for a bad design-file value of one scalar quantity (file
+    units), None where --set cannot say it (a vector, a deleted or non-numeric value)."""
+    from design.registry import PARAMETERS
+
+    for name, p in PARAMETERS.items():
+        if p.field is not None and "[" not in p.field:
+            unit_suffix = key.rsplit(".", 1)[-1].removeprefix(p.field.rsplit(".", 1)[-1])
+            if key.startswith(p.field) and unit_suffix in ("", "_mm", "_mpa", "_deg", "_g", "_t"):
+                if isinstance(value, float) and np.isfinite(value) and abs(value) < 1e300:
+                    return f"{name}={value:g}"
+    return None
+
+
+def _bad_truths():
+    from bad_designs import BAD_VALUES
+
+    for key, value, words in BAD_VALUES:
+        item = _settable(key, value)
+        if item is not None:
+            yield pytest.param(item, [w for w in words if w != key], id=item)
+
+
+@pytest.mark.parametrize(("item", "words"), list(_bad_truths()))
+def test_a_true_robot_a_design_file_refuses_is_refused_by_set(tmp_path, item, words):
+    """Every bad scalar the design file refuses (tests/support/bad_designs.py), given as
+    a true parameter, is one message saying why, exit 2, nothing written: the truth must
+    be a robot too (the rod under the printed tip, the wire in the bores, the magnet clear
+    of the robot), not only a number in range."""
+    out = tmp_path / "set"
+    result = run("synth", "--set", item, "--out", str(out))
+    assert result.exit_code == 2, result.output
+    assert all(w in result.output for w in words), (words, result.output)
+    assert "Traceback" not in result.output and not out.exists()
