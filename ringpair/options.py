@@ -173,11 +173,12 @@ OVERWRITE_POLICY = (
 )
 
 MAX_CONFIGURATIONS = 1_000_000
-"""Configurations a command solves at most unless --max-configs says more: about five
-minutes with the model for design work and 2 GB for a path (SOLVE_RATE, ROW_BYTES)."""
-SOLVE_RATE = 3_000.0
+"""Configurations a command solves at most unless --max-configs says more: about a quarter
+of an hour with the model for design work and 7 GB for a path (SOLVE_RATE, ROW_BYTES)."""
+SOLVE_RATE = 1_000.0
 """Configurations solved per second by the model for design work with the search for other
-stable states, on one core of the development machine (2 cores). [1/s]"""
+stable states, as ``workspace`` does them (with its controllable workspace and plots): 1,070
+to 2,230 measured on the development machine (2 cores) by benchmarks/estimates.py. [1/s]"""
 ROW_BYTES = 7_000
 """Memory one configuration takes from its solve to its CSV row (measured). [bytes]"""
 ANNOUNCE = 30.0

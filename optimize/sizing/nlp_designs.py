@@ -82,10 +82,10 @@ def material_combinations(study: Study) -> list[tuple[Material | None, Material 
     return list(itertools.product(cat, wire))
 
 
-START_SECONDS_PER_CONFIGURATION = 0.1
+START_SECONDS_PER_CONFIGURATION = 0.01
 """Time of one NLP start per configuration it samples (``configurations`` plus twice
-``neutral_configurations``): the small test study's starts (40 configurations) took 1 to
-3 s on the development machine (2 cores, shared). [s]"""
+``neutral_configurations``): 0.005 to 0.016 s measured on the development machine (2
+cores) by benchmarks/estimates.py on the small test study (40 configurations). [s]"""
 
 
 def nlp_starts(study: Study, pareto: bool = True) -> int:

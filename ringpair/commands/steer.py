@@ -46,10 +46,11 @@ from ringpair.plots import plot_path
 from ringpair.pressing import PRESS_STEP, steer_press
 from ringpair.tables import write_csv
 
-TARGET_SECONDS = 0.1
-"""Time one target takes with the model for design work (its seed grid aside): 2000
-targets took 209 s and 200 took 28 s on the development machine (2 cores, shared). [s]"""
-MAX_TARGETS = 3_000
+TARGET_SECONDS = 0.01
+"""Time one target takes with the model for design work (its seed grid aside): 0.006 to
+0.009 s measured on the development machine (2 cores) by benchmarks/estimates.py, targets
+about the demonstrator's home, a tenth of them out of reach. [s]"""
+MAX_TARGETS = 30_000
 """Targets per run unless --max-targets says more: about five minutes at TARGET_SECONDS."""
 
 STEER_COLUMNS = (

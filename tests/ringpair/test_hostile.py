@@ -255,7 +255,7 @@ def test_help_states_the_overwrite_policy(run):
         ),
         (
             ["--theta1", "0:360:0.05", "--theta2", "0:360:0.05"],
-            ["51,854,401 configurations", "about 4.8 h", "--max-configs"],
+            ["51,854,401 configurations", "about 14 h", "--max-configs"],
         ),
         (
             ["--theta1", "0:10:1", "--theta2", "0:10:1", "--max-configs", "100"],

@@ -156,12 +156,12 @@ def test_an_acquisition_number_beyond_int64_is_one_message(tmp_path, run, number
 
 @pytest.mark.parametrize("command", ["optimize", "study"])
 def test_a_study_too_big_to_solve_is_sized_before_any_work(tmp_path, run, command):
-    # 1,001 solves (the optimum and 1,000 Pareto points) x 100 starts: days of NLPs
+    # 1,001 solves (the optimum and 1,000 Pareto points) x 100 starts: hours of NLPs
     big = SMALL.replace("starts = 2", "starts = 100")
     (tmp_path / "s.toml").write_text(
         big + '[[pareto]]\nagainst = "external_distance"\npoints = 1000\n'
     )
     out = tmp_path / "out"
     result = run(command, str(tmp_path / "s.toml"), "--out", str(out))
-    one_message(result, "100,100 NLP starts", "100 starts", "days", "at most 5,000")
+    one_message(result, "100,100 NLP starts", "100 starts", "about 11 h", "at most 5,000")
     assert not out.exists()
