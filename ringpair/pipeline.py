@@ -261,8 +261,10 @@ def run_study(
         "forward",
         "forward re-simulation with the model for design work (and the disc steerable from home)",
         key,
-        lambda: _forward_pair(study.base, chosen, faithful)
-        | {"optimum": sweep_workspace(best.design, STEERABLE_STEP, faithful)},
+        lambda: (
+            _forward_pair(study.base, chosen, faithful)
+            | {"optimum": sweep_workspace(best.design, STEERABLE_STEP, faithful)}
+        ),
         w,
     )
     _stage(
