@@ -26,6 +26,7 @@ from rich.progress import (
 from rich.text import Text
 
 from design.designfile import read_regular
+from design.designfile.keys import shown
 from optimize.sizing.studyfile import Study
 from ringpair.options import (
     ANNOUNCE,
@@ -193,11 +194,15 @@ def study(
     from ringpair.pipeline import TOLERANCE_LOOP
 
     if not 2 <= samples <= MAX_SAMPLES:
+        size = ""  # no estimate for a count beyond any machine (a float cannot hold 10^400)
+        if MAX_SAMPLES < samples < 10**15:
+            size = (
+                f"{samples:,} (each sample solves {TOLERANCE_LOOP} configurations: about "
+                f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} and "
+                f"{samples * TOLERANCE_LOOP * ROW_BYTES / 1e9:.3g} GB)"
+            )
         raise UserError(
-            f"--samples must be between 2 and {MAX_SAMPLES:,}; got {samples:,} (each sample "
-            f"solves {TOLERANCE_LOOP} configurations: about "
-            f"{duration(samples * TOLERANCE_LOOP / SOLVE_RATE)} and "
-            f"{samples * TOLERANCE_LOOP * ROW_BYTES / 1e9:.3g} GB)"
+            f"--samples must be between 2 and {MAX_SAMPLES:,}; got {size or shown(samples)}"
         )
     if samples * TOLERANCE_LOOP / SOLVE_RATE > ANNOUNCE:
         err_console.print(

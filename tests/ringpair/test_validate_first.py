@@ -39,6 +39,8 @@ def one_message(result, *words):
         (("simulate", "--effects", "", "--theta1", "0"), ["--effects", "no model effect"]),
         (("simulate", "--effects", ",,", "--theta1", "0"), ["--effects", "no model effect"]),
         (("study", "--samples", "100000000"), ["--samples", "100,000", "GB"]),
+        (("study", "--samples", str(10**400)), ["--samples", "(401 characters)"]),
+        (("study", "--samples", "1"), ["--samples", "between 2 and 100,000", "got 1"]),
         (
             ("steer", "--to", "1,1", "--to", "2,2", "--to", "1,2", "--max-targets", "2"),
             ["--to: 3 targets, about", "at most 2 unless --max-targets"],
@@ -52,6 +54,8 @@ def one_message(result, *words):
         "effects ''",
         "effects ,,",
         "samples",
+        "samples 10^400",
+        "samples 1",
         "steer targets",
         "synth rod",
     ],
