@@ -21,6 +21,10 @@ given only the nominal design file and the data. Prints, per planted set and ove
   has its modulus as built, and where the final model does not fit the field's strength
   the parameters the data fix only relative to it
   (:data:`optimize.fitting.calibrate.FIELD_RELATIVE`) follow the as-built remanences;
+- beyond priors: how many baselines (and final models) needed a parameter beyond
+  PULL_LIMIT (3) prior sigmas of its nominal value (:mod:`optimize.fitting.calibrate.priors`;
+  ``--no-priors`` diagnoses with the plain least squares, as before priors, and judges
+  its estimates by the default priors: run both for the before and after);
 - time: median seconds per diagnosis (goal <= 30 s) on the worker processes
   :mod:`optimize.fitting.workers` gives it (``RINGPAIR_WORKERS``, default one per core),
   and the CPU seconds of the process and its workers (all threads; less sensitive to a
@@ -61,7 +65,12 @@ from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 
 from design.units import MM  # noqa: E402
-from optimize.fitting.calibrate import EFFECT_FREE, FIELD_RELATIVE, calibrate  # noqa: E402
+from optimize.fitting.calibrate import (  # noqa: E402
+    EFFECT_FREE,
+    FIELD_RELATIVE,
+    PULL_LIMIT,
+    calibrate,
+)
 from optimize.fitting.diagnose import Diagnosis, Fit, _fit, diagnose, report_key  # noqa: E402
 from optimize.fitting.planted import PLANTED_SETS, Planted, draw_planted  # noqa: E402
 from optimize.fitting.sensitivity import built_model  # noqa: E402
@@ -81,16 +90,21 @@ def warm_up() -> tuple[int, float]:
     return len(sets), time.perf_counter() - t0
 
 
+PRIORS = True
+"""Whether the diagnoses fit with priors (``--no-priors``: the plain least squares, the
+diagnosis before priors)."""
+
+
 def timed(case: Planted, j: int, workers: int | None = None) -> tuple[Diagnosis, float, float]:
     """Diagnose ``case`` (fold seed ``j``) on ``workers`` processes (None: the default,
-    :mod:`optimize.fitting.workers`); returns it with its wall and CPU seconds (this
-    process and its workers)."""
+    :mod:`optimize.fitting.workers`), with priors unless ``--no-priors`` (PRIORS);
+    returns it with its wall and CPU seconds (this process and its workers)."""
     saved = os.environ.get("RINGPAIR_WORKERS")
     if workers is not None:
         os.environ["RINGPAIR_WORKERS"] = str(workers)
     try:
         t0, c0 = time.perf_counter(), cpu_seconds()
-        result = diagnose(case.design, case.measurements, seed=j)
+        result = diagnose(case.design, case.measurements, seed=j, priors=PRIORS)
         return result, time.perf_counter() - t0, cpu_seconds() - c0
     finally:
         if saved is None:
@@ -198,6 +212,7 @@ def planted_cv(case: Planted, seed: int) -> float:
             cv=True,
             starts=[dict(case.truth)],
             sigma=None,
+            priors=PRIORS,
         )
     except Exception:  # the reference is then unknown; the diagnosis' row stands
         return math.nan
@@ -230,6 +245,10 @@ def score(
         "seconds": seconds,
         "cpu_seconds": cpu,
         "unexplained": result.unexplained,
+        # the estimates beyond PULL_LIMIT prior sigmas (judged by the default priors
+        # where the diagnosis fitted without them)
+        "baseline_beyond_prior": result.baseline.calibration.beyond_prior(),
+        "final_beyond_prior": result.final.calibration.beyond_prior(),
         "verdicts": {k: c.verdict for k, c in result.candidates.items()},
     }
 
@@ -256,6 +275,7 @@ def summary(rows: list[dict], label: str) -> str:
     cv = [r["cv_over_noise"] for r in ok if np.isfinite(r["cv_over_noise"])]
     rec = [z for r in ok for z in r["recovery"]]
     times = [r["seconds"] for r in ok]
+    beyond = [r for r in ok if "baseline_beyond_prior" in r]
     parts = [
         f"right {right}/{len(det)}"
         + (f" ({len(ok) - len(det)} undetectable)" * (len(ok) > len(det))),
@@ -280,6 +300,12 @@ def summary(rows: list[dict], label: str) -> str:
     if rec:
         rec_a = np.asarray(rec)
         parts.append(f"recovery median {np.median(rec_a):.2f}, within 2: {np.mean(rec_a <= 2):.0%}")
+    if beyond:
+        parts.append(
+            f"baseline beyond {PULL_LIMIT:g} prior sigmas "
+            f"{sum(bool(r['baseline_beyond_prior']) for r in beyond)}/{len(beyond)}, final "
+            f"{sum(bool(r['final_beyond_prior']) for r in beyond)}/{len(beyond)}"
+        )
     if times:
         parts.append(f"time median {np.median(times):.0f} s")
     cpu = [r["cpu_seconds"] for r in ok if "cpu_seconds" in r]
@@ -322,7 +348,15 @@ def main() -> None:
         help="also run each diagnosis in one process (the baseline of the worker processes' "
         "speed-up) and check it gives the same result",
     )
+    ap.add_argument(
+        "--no-priors",
+        action="store_true",
+        help="diagnose with the plain least squares, no priors (the diagnosis before them): "
+        "the baseline of the priors' figures",
+    )
     args = ap.parse_args()
+    global PRIORS
+    PRIORS = not args.no_priors
     if args.summary:
         rows_of: dict[str, list[dict]] = {}
         for line in args.summary.read_text().splitlines():
@@ -393,7 +427,8 @@ def main() -> None:
                     with args.jsonl.open("a") as f:
                         f.write(json.dumps(row, default=float) + "\n")
                 bar.advance(task)
-    report(rows, f"--random {args.random} --seed {args.seed}" + " --on-axis" * args.on_axis)
+    title = f"--random {args.random} --seed {args.seed}" + " --on-axis" * args.on_axis
+    report(rows, title + " --no-priors" * args.no_priors)
 
 
 def report(rows: dict[str, list[dict]], title: str) -> None:

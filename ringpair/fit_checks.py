@@ -80,12 +80,16 @@ def misses(design: Design, m: Measurements, fit: CalibrationResult) -> list[str]
 def inseparable(fit: CalibrationResult) -> list[str]:
     """A sentence naming the parameters the data cannot separate: those whose standard
     error is wider than the nominal design's own uncertainty (the prior width of
-    :mod:`optimize.fitting.calibrate`), with the pairs that trade off."""
+    :mod:`optimize.fitting.calibrate`), with the pairs that trade off. The errors are the
+    data's alone (a fit with priors: without the priors' residuals, which bound every
+    error by its prior)."""
     from optimize.fitting.calibrate import FREE_PARAMETERS
 
+    errors = fit.data_standard_error or fit.standard_error
+    correlation = fit.correlation if fit.data_correlation is None else fit.data_correlation
     loose = []
     for name in fit.names:
-        spec, error = FREE_PARAMETERS[name], fit.standard_error[name]
+        spec, error = FREE_PARAMETERS[name], errors[name]
         if spec.kind == "log":  # error relative to the estimate against a relative width
             spread, width = error / max(abs(fit.estimate[name]), 1e-300), spec.prior
             shown = f"{spread:.2g} relative"
@@ -100,10 +104,10 @@ def inseparable(fit: CalibrationResult) -> list[str]:
     names = [n for n, _ in loose]
     index = {n: i for i, n in enumerate(fit.names)}
     pairs = [
-        f"{a} and {b} trade off (correlation {fit.correlation[index[a], index[b]]:+.2f})"
+        f"{a} and {b} trade off (correlation {correlation[index[a], index[b]]:+.2f})"
         for k, a in enumerate(names)
         for b in names[k + 1 :]
-        if abs(fit.correlation[index[a], index[b]]) > TRADE_OFF
+        if abs(correlation[index[a], index[b]]) > TRADE_OFF
     ]
     return [
         "the data cannot separate "

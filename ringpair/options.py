@@ -114,6 +114,38 @@ CSV_DESIGN = click.option(
     help="Design file for a CSV DATA (default: the demonstrator); a data-set folder has its own.",
 )
 
+PRIOR = click.option(
+    "--prior",
+    "prior_texts",
+    multiple=True,
+    metavar="KEY=SIGMA",
+    help="One sigma of a free parameter's prior, overriding the default and the data "
+    "folder's priors.toml: a length in mm with its suffix (external_center_mm=3 sets x, y "
+    "and z; external_center_z_mm=1, free_length_mm=2), a log-fitted one as the sigma of "
+    "ln(value/nominal) (bending_rigidity_scale=0.3); inf drops it. Repeatable.",
+)
+NO_PRIORS = click.option(
+    "--no-priors",
+    is_flag=True,
+    help="Plain least squares: no priors (the parameters may go anywhere within their bounds).",
+)
+
+
+def priors_from(data: Path, texts: tuple[str, ...], off: bool) -> bool | dict[str, float]:
+    """The priors of a fit of ``data``: False with --no-priors, else the defaults with a
+    data-set folder's priors.toml and then ``texts`` (--prior) overriding them."""
+    from optimize.fitting.calibrate import load_priors, parse_prior_options
+
+    if off:
+        if texts:
+            raise UserError("--prior and --no-priors contradict each other")
+        return False
+    with bad_input(ValueError):
+        widths = load_priors(data) if data.is_dir() else {}
+        widths.update(parse_prior_options(texts))
+    return widths or True
+
+
 SCHEDULER = click.option("--scheduler", default=None, help="Address of a running Dask scheduler.")
 
 EFFECTS_HELP = (

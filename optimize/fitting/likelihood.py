@@ -39,6 +39,7 @@ import numpy as np
 
 from design.records import Design
 from optimize.fitting.calibrate import FREE_PARAMETERS, CalibrationResult, calibrate
+from optimize.fitting.calibrate.priors import pull
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.workers import parallel_map
 
@@ -174,8 +175,7 @@ def widened(name: str, estimate: float, interval: Interval, relative: float) -> 
 
 
 def _check(fit: CalibrationResult) -> None:
-    if fit.priors:
-        raise ValueError("profile intervals are for fits without priors (the data's misfit)")
+    """Nothing to check: a fit with priors is profiled on its posterior (:func:`_refit`)."""
 
 
 def _refit(
@@ -192,7 +192,9 @@ def _refit(
     """Refit ``rest`` with ``name`` fixed at ``value``: (signed r, the best refit). Each
     start is the others' values and the rows' states near them or None (the first
     evaluation warm-starts from them, :func:`optimize.fitting.calibrate.calibrate`: a
-    profile's point lies near the fit or the point before it)."""
+    profile's point lies near the fit or the point before it). A fit with priors is
+    refitted with them and profiled on its posterior."""
+    priors: bool | dict[str, float] = {n: fit.width(n) for n in rest} if fit.priors else False
     cal = min(
         (
             calibrate(
@@ -205,13 +207,18 @@ def _refit(
                 ordered=ordered,
                 sigma=sigma,
                 states=states,
+                priors=priors,
             )
             for s, states in starts
         ),
-        key=lambda c: c.chi2,
+        key=lambda c: c.chi2 + c.prior_chi2,
     )
     s2 = fit.chi2 / fit.dof
-    r = math.sqrt(max(cal.chi2 - fit.chi2, 0.0) / s2)
+    # With priors, the posterior's: the data's misfit over its noise, plus the priors' own
+    # (the fixed parameter's too, which the refit does not see).
+    own = pull(name, value, fit.nominal[name], fit.width(name)) ** 2 if fit.priors else 0.0
+    prior = cal.prior_chi2 + own - fit.prior_chi2
+    r = math.sqrt(max((cal.chi2 - fit.chi2) / s2 + prior, 0.0))
     return math.copysign(r, value - fit.estimate[name]), cal
 
 

@@ -7,6 +7,7 @@ figures are millimetres.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -52,6 +53,35 @@ class GridResult:
     max_abs_mm: float
     evaluations: int
     time_s: float
+
+
+def paper_pulls(design: Design, stiffness: float, field_scale: float) -> dict[str, float]:
+    """What the paper's factors K_E, K_B (:func:`two_factor_parameters`) ask of the
+    physical parameters, as pulls against the default priors
+    (:mod:`optimize.fitting.calibrate.priors`): the bending rigidity scaled by K_E, the
+    external remanence by K_B, and the external magnet's centre moved to K_B times its
+    place (by name; prior sigmas, signed). [-]"""
+    from design.registry import PARAMETERS
+
+    out = {
+        "bending_rigidity_scale": math.log(stiffness) / _width("bending_rigidity_scale"),
+        "external_remanence": math.log(field_scale) / _width("external_remanence"),
+    }
+    magnet = design.external_magnet
+    assert magnet is not None, "the paper's K_B scales the external magnet"
+    for a, centre in zip("xyz", magnet.center, strict=True):
+        spec = PARAMETERS[f"external_center_{a}"].fit
+        assert spec is not None
+        out[f"external_center_{a}"] = (field_scale - 1) * centre / spec.step / spec.prior
+    return out
+
+
+def _width(name: str) -> float:
+    from design.registry import PARAMETERS
+
+    spec = PARAMETERS[name].fit
+    assert spec is not None
+    return spec.prior
 
 
 def two_factor_parameters(base: np.ndarray, stiffness: float, field_scale: float) -> np.ndarray:

@@ -29,7 +29,10 @@ cannot absorb it. For each planted effect, the model with every other planted ef
 diagnosis' own fits (its default free parameters, started from the nominal design and
 from the truth); the effect's *margin* is that fit's RMS residual per measured
 coordinate over the noise. A data set is detectable where every planted effect's margin
-is at least DETECTABLE. :func:`draw_planted` redraws a set-up (at most ``tries`` times)
+is at least DETECTABLE. The margins' fits have no priors (the other models may absorb
+what they can anywhere within their bounds): the diagnosis, which fits with priors, can
+absorb less, so a set detectable by this criterion is detectable by it (and the drawn
+sets are those drawn before priors). :func:`draw_planted` redraws a set-up (at most ``tries`` times)
 until it is detectable and says so when it is not.
 
 SI units inside; ``noise_mm`` is millimetres.
@@ -169,6 +172,7 @@ def margins(case: Planted) -> dict[str, float]:
             cv=False,
             starts=[None, case.truth],
             sigma=None,
+            priors=False,
         )
         out[effect] = math.sqrt(fit.rss / fit.n) / (case.noise_mm * MM)
     return out

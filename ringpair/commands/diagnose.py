@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import click
 import numpy as np
@@ -17,7 +18,9 @@ from ringpair.fit_checks import coordinates, fit_warnings, misses, out_of_reach
 from ringpair.options import (
     CSV_DESIGN,
     DATA,
+    NO_PRIORS,
     OVERWRITE_POLICY,
+    PRIOR,
     UserError,
     bad_input,
     console,
@@ -27,6 +30,7 @@ from ringpair.options import (
     measured_data,
     output_path,
     path_option,
+    priors_from,
     progress,
     warn,
 )
@@ -39,6 +43,7 @@ a part per row. [s, s/row]"""
 ANNOUNCE = 30.0
 """A diagnosis estimated longer than this is announced with its estimate. [s]"""
 if TYPE_CHECKING:
+    from optimize.fitting.calibrate import CalibrationResult
     from optimize.fitting.measurements import Measurements
 
 REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
@@ -75,6 +80,8 @@ REPORT_FILES = ("residuals.png", "positions.png", "diagnosis.html")
     help="Processes for the independent fits (candidates, folds, intervals) "
     "[default: $RINGPAIR_WORKERS, else one per core].",
 )
+@PRIOR
+@NO_PRIORS
 def diagnose(
     data: Path,
     design_path: Path | None,
@@ -84,6 +91,8 @@ def diagnose(
     seed: int,
     max_rows: int,
     workers: int | None,
+    prior_texts: tuple[str, ...],
+    no_priors: bool,
 ) -> None:
     """What the simulation gets wrong on measured DATA, the physical cause, and the gain.
 
@@ -106,6 +115,7 @@ def diagnose(
         raise UserError(str(exc)) from None
 
     d, m = measured_data(data, design_path)
+    priors = priors_from(data, prior_texts, no_priors)
     seconds = SECONDS[0] + SECONDS[1] * len(m)
     if len(m) > max_rows:
         raise UserError(
@@ -137,7 +147,7 @@ def diagnose(
             # Tips beyond the robot's reach are not this robot's (units, another set-up):
             # no effect can bring its tip there, so none is searched.
             searched = () if notes else tuple(EFFECT_FREE)
-            result = run_diagnosis(d, m, searched, k=folds, seed=seed, progress=say)
+            result = run_diagnosis(d, m, searched, k=folds, seed=seed, progress=say, priors=priors)
         except (ArithmeticError, RuntimeError, np.linalg.LinAlgError) as exc:
             # the calibrated baseline could not be fitted (a candidate's failure is in
             # the result): one message, exit 1
@@ -177,6 +187,8 @@ def diagnose(
         console.print(f"cause {cause.evidence}")
     for name, power in result.power.items():
         console.print(f"power of the data for {name}: {power['note']}")
+    for name, fit in fits:
+        console.print(f"{name}: {_pulls(fit.calibration)}")
     if not result.causes and notes:
         console.print(
             "causes: [] (no effect searched: the measured tips lie beyond the robot's "
@@ -186,6 +198,9 @@ def diagnose(
         console.print(
             "causes: [] (the model does not explain the data either: see the warning)"
             if missed
+            else "causes: [] (the calibrated baseline does not explain the data either: see "
+            "'not explained')"
+            if result.unexplained
             else "causes: [] (the calibrated baseline explains the data)"
         )
     if result.unexplained:
@@ -198,6 +213,35 @@ def diagnose(
     if report is not None:
         for path in write_report(result, m, report):
             console.print(f"wrote {path}")
+
+
+def _pulls(cal: CalibrationResult) -> str:
+    """Each estimate with its prior and pull, in one line."""
+    from optimize.fitting.calibrate import FREE_PARAMETERS, PULL_LIMIT
+
+    parts = []
+    for row in cal.table():
+        unit = f" {row['unit']}" if row["unit"] else ""
+        width = float(cast(float, row["prior_sigma"]))
+        if not math.isfinite(width):
+            sigma = "none"
+        elif FREE_PARAMETERS[str(row["name"])].kind == "log":
+            sigma = f"a factor {math.exp(width):.3g}"
+        else:
+            sigma = f"{width:.3g}{unit}"
+        mark = " (beyond the prior)" if abs(cast(float, row["pull"])) > PULL_LIMIT else ""
+        parts.append(
+            f"{row['name']} {row['estimate']:.5g}{unit} (nominal {row['nominal']:.5g}, prior "
+            f"sigma {sigma}, pull {row['pull']:+.1f}){mark}"
+        )
+    judged = (
+        "the posterior"
+        if cal.priors
+        else "least squares, judged by the priors"
+        if cal.prior_width
+        else "no priors given; pulls against the default priors"
+    )
+    return f"estimates and pulls ({judged}): " + "; ".join(parts)
 
 
 def _number(value: float | None, spec: str = ".3f") -> str:

@@ -15,8 +15,10 @@ Parameters are fitted in well-scaled units: scale factors, moduli and remanences
 their logarithm (relative change), lengths in millimetres, angles in degrees, masses in
 grams (:data:`FREE_PARAMETERS`). Standard errors come from the Gauss-Newton covariance
 (J^T J)^-1 s^2 with s^2 = chi^2 / (rows - parameters), mapped to SI by the delta method.
-Optional priors (``priors=True``) add one Gaussian penalty row per parameter, centred on
-the nominal design, with the widths of :data:`FREE_PARAMETERS`.
+With priors (``priors=True``, :mod:`optimize.fitting.calibrate.priors`) the fit maximises
+the posterior: one Gaussian residual per parameter, centred on the nominal design, with
+the widths of :data:`FREE_PARAMETERS` or overrides; each estimate's pull (prior sigmas
+moved) is :meth:`CalibrationResult.pulls`, and one beyond PULL_LIMIT is not physical.
 
 Warm starts: the state of each configuration is the load ramp's
 (:func:`design.equilibrium.solve_equilibria`, or the driven path's), but between two
@@ -79,6 +81,15 @@ from optimize.fitting.calibrate.policy import (
     FreeParameter,
     default_free,
 )
+from optimize.fitting.calibrate.priors import (
+    PRIORS_FILE,
+    PULL_LIMIT,
+    Priors,
+    load_priors,
+    parse_prior_options,
+    parse_priors,
+    prior_widths,
+)
 from optimize.fitting.calibrate.problem import TIP_ANGLE_SIGMA
 from optimize.fitting.calibrate.result import (
     DEFAULT_SIGMA,
@@ -123,6 +134,13 @@ __all__ = [
     "GridResult",
     "Prediction",
     "calibrate",
+    "PRIORS_FILE",
+    "PULL_LIMIT",
+    "Priors",
+    "load_priors",
+    "parse_prior_options",
+    "parse_priors",
+    "prior_widths",
     "held_out_inflation",
     "DEFAULT_SIGMA",
     "TIP_ANGLE_SIGMA",

@@ -6,6 +6,7 @@ answer checked with the load ramp (module docstring of
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Literal
@@ -18,6 +19,7 @@ from design.records import Design
 from design.registry import index
 from design.units import MM
 from optimize.fitting.calibrate.policy import FREE_PARAMETERS, _check_free, default_free
+from optimize.fitting.calibrate.priors import Priors, prior_widths
 from optimize.fitting.calibrate.problem import _Problem
 from optimize.fitting.calibrate.result import DEFAULT_SIGMA, CalibrationResult, row_sigma
 from optimize.fitting.measurements import Measurements
@@ -26,6 +28,10 @@ from optimize.fitting.sensitivity import position_errors
 WARM_RETRIES = 1
 """Fits made again from the start with warm starts, the rows whose warm start went
 elsewhere by the ramp, before one with every row by the ramp."""
+NOISE_AGREES = 1.25
+"""With priors and no stated noise, a fit is made again with the noise its residuals
+imply unless that lies within this factor of the one assumed (the priors' weight then
+within 1.6x of the data's). [-]"""
 WARM_TOLERANCE = 1e-3
 """The warm-started states of a fit's answer are the ramp's where every fitted row's tip
 lies within this fraction of its sigma of the ramp's (else the fit goes on with the
@@ -56,7 +62,7 @@ def calibrate(
     rows: np.ndarray | Sequence[int] | None = None,
     fixed: Mapping[str, float] | None = None,
     initial: Mapping[str, float] | None = None,
-    priors: bool = False,
+    priors: bool | Priors = False,
     sigma: float | None = None,
     ordered: bool | Literal["driven"] | None = None,
     tip_angles: bool = True,
@@ -65,6 +71,8 @@ def calibrate(
     anchor: Mapping[str, tuple[float, float]] | None = None,
     warm_start: bool = True,
     states: np.ndarray | None = None,
+    within: float | None = None,
+    posterior: bool = True,
 ) -> CalibrationResult:
     """Fit the free parameters of the model with ``effects`` to the measurements ``m``.
 
@@ -74,8 +82,10 @@ def calibrate(
     fixed : values of other model parameters (names of ``design.registry.NAMES``) that
         differ from the design, e.g. an earlier fit's. [SI]
     initial : starting values of free parameters; default the nominal design's. [SI]
-    priors : add a Gaussian penalty row per free parameter, centred on the nominal design,
-        with the width of :data:`FREE_PARAMETERS`.
+    priors : maximise the posterior: a Gaussian residual per free parameter, centred on
+        the nominal design (:mod:`optimize.fitting.calibrate.priors`): True with the
+        default widths, a mapping with those widths overridden (fit units, as
+        :func:`optimize.fitting.calibrate.priors.parse_priors` gives them).
     sigma : one-sigma position uncertainty for rows whose data give none. [m]
     ordered : see :func:`predict`.
     tip_angles : also fit measured tip angles (sigma TIP_ANGLE_SIGMA) where present.
@@ -88,6 +98,13 @@ def calibrate(
     states : shape (N, n_unknowns), each row's state at parameters near the start (e.g.
         the fit of all the data, for a fold of a cross-validation that starts there; NaN:
         none): the first evaluation is warm-started from them too.
+    within : with priors, bound each free parameter to its nominal value +- this many
+        prior sigmas (the prior-bounded fit: what the model can do with physical
+        parameters only, e.g. PULL_LIMIT). [-]
+    posterior : False: the priors only bound the fit (``within``), without their residuals
+        (a least-squares fit within what the bench allows; the power of the data refits
+        so, where its first order, a projection on the data's Jacobian, has no priors
+        either).
     min_solved : the fraction of fitted rows that must have an equilibrium at the start;
         below it :class:`UnsolvedStart` is raised before any fitting (a least-squares fit
         from a start where most rows have no state rarely finds one). [-]
@@ -109,10 +126,15 @@ def calibrate(
         start[name] = float(value)
     fit_rows = np.arange(len(m)) if rows is None else np.arange(len(m))[np.asarray(rows)]
     s_rows = row_sigma(m, sigma)
+    table = prior_widths(priors if isinstance(priors, Mapping) else None)
+    bounding = np.array([table[n] for n in names])  # what ``within`` counts sigmas of
+    widths = bounding if priors is not False and posterior else np.full(len(names), np.inf)
     prob = _Problem(
-        model, base, names, m, fit_rows, s_rows, ordered, priors, tip_angles, np.zeros(len(names))
+        model, base, names, m, fit_rows, s_rows, ordered, widths, tip_angles, np.zeros(len(names))
     )
     prob.warm = warm_start
+    prob.prior_sigma = bounding.copy()
+    prob.within = within
     if states is not None:
         if states.shape != (len(m), model.n_unknowns):
             raise ValueError(
@@ -157,7 +179,7 @@ def calibrate(
     # With priors, the weight of the data against them needs the noise: when the data do
     # not give it, estimate it from a first fit's residuals and fit again.
     noise_known = sigma is not None or bool(np.isfinite(m.sigma[fit_rows]).all())
-    passes = 2 if priors and not noise_known else 1
+    passes = 2 if np.isfinite(widths).any() and not noise_known else 1
     u_start = u0.copy()
 
     def solve(u_from: np.ndarray) -> OptimizeResult:
@@ -171,12 +193,17 @@ def calibrate(
             max_nfev=max_nfev or 50 * (len(names) + 1),
         )
 
+    rescaled = 1.0  # the factor on the rows' sigmas of the fit's last pass
     for attempt in range(passes):
         sol = solve(u0)
         u0 = sol.x
         if attempt + 1 < passes:
             r = prob.residuals(sol.x)[: prob.n_data()]
-            prob.sigma = prob.sigma * np.sqrt(float(r @ r) / dof)
+            scale = math.sqrt(float(r @ r) / dof)
+            if 1 / NOISE_AGREES < scale < NOISE_AGREES:
+                break  # the assumed noise was the data's: the weights stand
+            prob.sigma = prob.sigma * scale
+            rescaled *= scale
             prob.invalidate()
     u = sol.x
     tolerance = WARM_TOLERANCE * float(np.min(prob.sigma[fit_rows]))
@@ -220,21 +247,9 @@ def calibrate(
     chi2 = float(r_data @ r_data)
     s2 = chi2 / dof
     jac = prob.jacobian(u)
-    jtj = jac.T @ jac
-    # Gauss-Newton covariance; along directions the data do not determine (eigenvalues of
-    # J^T J below 1e-10 of the largest) the parameters involved get an infinite error.
-    evals, evecs = np.linalg.eigh(jtj)
-    determined = evals > 1e-10 * max(evals.max(), 1e-300)
-    inv = evecs[:, determined] @ np.diag(1 / evals[determined]) @ evecs[:, determined].T
-    cov_u = inv * s2
-    sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
-    undetermined = (np.abs(evecs[:, ~determined]) > 1e-3).any(axis=1)
-    sd_u[undetermined] = np.inf
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov_u / np.outer(sd_u, sd_u)
-    corr[undetermined, :] = np.nan
-    corr[:, undetermined] = np.nan
-    np.fill_diagonal(corr, 1.0)
+    # the posterior's (with the priors' rows), and the data's alone (what they separate)
+    sd_u, corr, _, rank = _covariance(jac, s2)
+    data_sd_u, data_corr, data_undetermined, data_rank = _covariance(jac[: prob.n_data()], s2)
     message = str(sol.message).rstrip(".")
     if restarted:
         message += (
@@ -246,12 +261,12 @@ def calibrate(
             "; better from the first answer with some parameters back at the start "
             "(the start lies where the ramp tips those rows to other states)"
         )
-    rank = int(determined.sum())
-    if rank < len(names):
-        loose = ", ".join(n for n, u in zip(names, undetermined, strict=True) if u)
+    if data_rank < len(names):
+        loose = ", ".join(n for n, u in zip(names, data_undetermined, strict=True) if u)
         message += (
-            f"; the data determine only {rank} of {len(names)} parameter combinations "
-            f"({loose} trade off against each other: free fewer, or use priors)"
+            f"; the data determine only {data_rank} of {len(names)} parameter combinations "
+            f"({loose} trade off against each other: free fewer"
+            + (", or use priors)" if rank < len(names) else "; the priors fix them)")
         )
     dpdu = prob.dp_du(u)
     at_bounds = tuple(
@@ -273,6 +288,8 @@ def calibrate(
         standard_error={n: float(abs(dpdu[j]) * sd_u[j]) for j, n in enumerate(names)},
         nominal=nominal,
         correlation=corr,
+        data_standard_error={n: float(abs(dpdu[j]) * data_sd_u[j]) for j, n in enumerate(names)},
+        data_correlation=data_corr,
         params=p,
         effects=model.effects,
         residuals=residuals,
@@ -281,7 +298,9 @@ def calibrate(
         rmse_mm=float(np.sqrt(np.mean(e**2)) / MM) if e.size else float("nan"),
         max_abs_mm=float(e.max() / MM) if e.size else float("nan"),
         noise_mm=float(np.sqrt(s2) * common / MM),
-        chi2=chi2,
+        # on the rows' own sigmas (fits from several starts compare it; a second pass
+        # weighs the data by the noise it found, which differs from fit to fit)
+        chi2=chi2 * rescaled**2,
         dof=dof,
         converged=bool(sol.status > 0 and unconverged == 0),
         at_bounds=at_bounds,
@@ -289,8 +308,31 @@ def calibrate(
         evaluations=prob.evaluations,
         time_s=time.perf_counter() - t0,
         message=message,
-        priors=priors,
+        priors=bool(np.isfinite(widths).any()),
+        prior_width={} if priors is False else dict(zip(names, map(float, bounding), strict=True)),
+        within=prob.within,
+        prior_chi2=float(np.sum(np.where(np.isfinite(widths), u / widths, 0.0) ** 2)),
         states=np.where(pred.equilibria.converged[:, None], pred.equilibria.unknowns, np.nan),
         jacobian=jac[: prob.n_data()],
         jacobian_rows=np.concatenate([np.nonzero(prob.pos_mask)[0], np.nonzero(prob.ang_mask)[0]]),
     )
+
+
+def _covariance(jac: np.ndarray, s2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The Gauss-Newton covariance (J^T J)^-1 s2 of weighted residuals with Jacobian
+    ``jac`` (fit units): the standard errors, the correlation, which parameters lie along
+    directions ``jac`` does not determine (eigenvalues of J^T J below 1e-10 of the
+    largest: their error infinite, their correlations NaN), and the rank."""
+    evals, evecs = np.linalg.eigh(jac.T @ jac)
+    determined = evals > 1e-10 * max(evals.max(initial=0.0), 1e-300)
+    inv = evecs[:, determined] @ np.diag(1 / evals[determined]) @ evecs[:, determined].T
+    cov_u = inv * s2
+    sd_u = np.sqrt(np.clip(np.diag(cov_u), 0, None))
+    undetermined = (np.abs(evecs[:, ~determined]) > 1e-3).any(axis=1)
+    sd_u[undetermined] = np.inf
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_u / np.outer(sd_u, sd_u)
+    corr[undetermined, :] = np.nan
+    corr[:, undetermined] = np.nan
+    np.fill_diagonal(corr, 1.0)
+    return sd_u, corr, undetermined, int(determined.sum())

@@ -45,7 +45,7 @@ class _Problem:
         rows: np.ndarray,
         sigma: np.ndarray,
         ordered: bool | Literal["driven"] | None,
-        priors: bool,
+        widths: np.ndarray,
         tip_angles: bool,
         nominal_u: np.ndarray,
     ) -> None:
@@ -54,7 +54,9 @@ class _Problem:
         self.spec = [FREE_PARAMETERS[n] for n in names]
         # Gaussian penalty rows (u - centre) / width, fit units; an infinite width: none.
         self.prior_centre = nominal_u.copy()
-        self.prior_width = np.array([s.prior if priors else np.inf for s in self.spec])
+        self.prior_width = np.asarray(widths, float).copy()
+        self.prior_sigma = self.prior_width.copy()  # the priors' own (anchors change the rows')
+        self.within: float | None = None  # bounds at this many prior sigmas, if set
         self.p0 = np.array([base[index(n)] for n in names])
         self.cols = [SENSITIVE.index(n) for n in names]
         self.idx = [index(n) for n in names]
@@ -116,7 +118,11 @@ class _Problem:
             else:
                 lo.append(max(spec.lower - p0, -spec.span) / spec.step)
                 hi.append(min(spec.upper - p0, spec.span) / spec.step)
-        return np.array(lo), np.array(hi)
+        lower, upper = np.array(lo), np.array(hi)
+        if self.within is not None:  # the prior-bounded fit: nominal +- within sigmas
+            reach = np.where(np.isfinite(self.prior_sigma), self.within * self.prior_sigma, np.inf)
+            lower, upper = np.maximum(lower, -reach), np.minimum(upper, reach)
+        return lower, upper
 
     def evaluate(
         self, u: np.ndarray, cold: bool = False

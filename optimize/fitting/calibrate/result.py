@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +13,7 @@ import numpy as np
 from design.geometry import rest_position
 from design.registry import index
 from optimize.fitting.calibrate.policy import FREE_PARAMETERS
+from optimize.fitting.calibrate.priors import PULL_LIMIT, prior_sigma_shown, pull
 from optimize.fitting.measurements import Measurements
 
 DEFAULT_SIGMA = 1e-3
@@ -86,14 +88,46 @@ class CalibrationResult:
     time_s: float
     message: str = ""
     priors: bool = field(default=False)
+    data_standard_error: dict[str, float] = field(default_factory=dict)
+    """The standard errors the data alone give (without the priors' residuals; the same
+    as ``standard_error`` for a fit without priors): what the data separate. [SI]"""
+    data_correlation: np.ndarray | None = field(default=None, repr=False)
+    """The correlation of the data alone (as ``data_standard_error``)."""
+    prior_width: dict[str, float] = field(default_factory=dict)
+    """Each free parameter's one-sigma prior in fit units (log: of ln(value / nominal));
+    infinite: none (:mod:`optimize.fitting.calibrate.priors`); empty for a fit given no
+    priors (judged by the defaults)."""
+    within: float | None = None
+    """The prior-bounded fit's bounds, in prior sigmas (calibrate's ``within``); None: the
+    registry's bounds only."""
+    prior_chi2: float = 0.0
+    """The sum of the squared pulls: what the priors add to ``chi2`` in the posterior. [-]"""
     states: np.ndarray | None = field(default=None, repr=False)
     jacobian: np.ndarray | None = field(default=None, repr=False)
     jacobian_rows: np.ndarray | None = field(default=None, repr=False)
 
+    def pulls(self) -> dict[str, float]:
+        """How many prior sigmas each estimate moved from its nominal value (signed; 0
+        where it has no prior). A fit without priors is judged by the default ones. [-]"""
+        return {n: pull(n, self.estimate[n], self.nominal[n], self.width(n)) for n in self.names}
+
+    def width(self, name: str) -> float:
+        """The prior width ``name`` is judged by, fit units: the fit's own, or the default
+        (:func:`optimize.fitting.calibrate.priors.prior_widths`) for a fit without priors."""
+        if name in self.prior_width:
+            return self.prior_width[name]
+        return math.inf if self.priors else float(FREE_PARAMETERS[name].prior)
+
+    def beyond_prior(self, limit: float = PULL_LIMIT) -> dict[str, float]:
+        """The estimates more than ``limit`` prior sigmas from nominal, with their pulls:
+        not physical (:mod:`optimize.fitting.calibrate.priors`). [-]"""
+        return {n: p for n, p in self.pulls().items() if abs(p) > limit}
+
     def table(self) -> list[dict[str, object]]:
         """One row per parameter in report units: name, unit, nominal, estimate, standard
-        error, relative change."""
+        error, relative change, prior width (:func:`prior_sigma_shown`) and pull."""
         rows = []
+        pulls = self.pulls()
         for name in self.names:
             label, factor = FREE_PARAMETERS[name].label
             nom, est = self.nominal[name], self.estimate[name]
@@ -105,6 +139,8 @@ class CalibrationResult:
                     "estimate": est * factor,
                     "standard_error": self.standard_error[name] * factor,
                     "change": (est / nom - 1) if nom else float("nan"),
+                    "prior_sigma": prior_sigma_shown(name, self.width(name)),
+                    "pull": pulls[name],
                 }
             )
         return rows

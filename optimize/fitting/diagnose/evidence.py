@@ -18,11 +18,13 @@ from optimize.fitting.calibrate import (
     EFFECT_FREE,
     FIELD_RELATIVE,
     FIELD_TOLERANCE,
+    PULL_LIMIT,
 )
 from optimize.fitting.diagnose.result import (
     Candidate,
     Cause,
     Fit,
+    parameter_values,
     report_key,
 )
 from optimize.fitting.likelihood import Interval
@@ -155,8 +157,28 @@ def _bic_verdict(c: Candidate) -> str:
     return text
 
 
+def _unphysical(fit: Fit) -> str:
+    """'' where every estimate of ``fit`` lies within PULL_LIMIT prior sigmas of its
+    nominal value (or it was given no priors); else what it needs, as 'needs
+    <parameter> = <value> (<pull> prior sigmas), ...'. [-]"""
+    cal = fit.calibration
+    if not cal.prior_width:
+        return ""
+    beyond = cal.beyond_prior()
+    if not beyond:
+        return ""
+    shown = parameter_values(cal)
+    parts = []
+    for name, value in sorted(beyond.items(), key=lambda kv: -abs(kv[1])):
+        key, _ = report_key(name)
+        parts.append(f"{key} = {shown[key]:.4g} ({value:+.1f} prior sigmas)")
+    return f"needs {', '.join(parts)}: beyond {PULL_LIMIT:g} prior sigmas, not physical"
+
+
 def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> str:
-    """What the final model leaves unexplained, and how large it is ('' if nothing)."""
+    """What the final model leaves unexplained, and how large it is ('' if nothing); a
+    final model that needs a parameter beyond its prior (:func:`_unphysical`) does not
+    explain the data either."""
     left = [d for d in s if d.p_value < STRUCTURE_P]
     size = f"{fit.calibration.rmse_mm:.3g} mm RMS, {fit.cv_rmse_mm:.3g} mm cross-validated"
     stated = np.isfinite(m.sigma)
@@ -164,6 +186,13 @@ def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> 
         axes = m.measured.sum(axis=1).mean()
         noise = float(np.median(m.sigma[stated]) * math.sqrt(axes) / MM)
         size += f"; the stated noise alone would give {noise:.3g} mm"
+    unphysical = _unphysical(fit)
+    if unphysical:
+        return (
+            f"{fit.name} fits ({size}) only with parameters the bench rules out: it "
+            f"{unphysical}; a prior is violated (the set-up is not as the design file says, "
+            "or an effect no candidate models is absorbed by them)"
+        )
     if left:
         return (
             "structure remains that no candidate explains: the residuals still depend on "

@@ -16,6 +16,7 @@ from design.model import model_for
 from design.records import Design
 from optimize.fitting.calibrate import (
     CalibrationResult,
+    Priors,
     UnsolvedStart,
     calibrate,
     cross_validate,
@@ -60,17 +61,30 @@ def _fit(
     sigma: float | None,
     max_nfev: int | None = None,
     free: Sequence[str] = (),
+    priors: bool | Priors = True,
+    within: float | None = None,
 ) -> Fit:
     """Calibrate ``effects`` from each start (None: the nominal design; a fit: its
     estimates, and its states if it is of this model; a mapping: these values, the others
     nominal), keep the best, and
     cross-validate it if ``cv``. ``free``: the free parameters (default: the effects'
-    :func:`default_free`)."""
+    :func:`default_free`). ``priors`` (:mod:`optimize.fitting.calibrate.priors`: True, the
+    defaults; a mapping, widths overridden; False, none) do not pull the fit, a least
+    squares fit as without them: they judge its estimates (their pulls) and, with
+    ``within``, bound each parameter to its nominal value +- that many prior sigmas."""
     free = tuple(free) or default_free(effects)
     model = model_for(effects)
     mode: bool | Literal["driven"] = "hysteresis" in effects
 
-    options: dict[str, Any] = {"sigma": sigma, "max_nfev": max_nfev}
+    # the priors judge and (``within``) bound the fit; the diagnosis fits by least squares
+    options: dict[str, Any] = {
+        "sigma": sigma,
+        "max_nfev": max_nfev,
+        "priors": priors,
+        "posterior": False,
+    }
+    if within is not None:  # the prior-bounded fit (calibrate's ``within``)
+        options["within"] = within
     if max_nfev is not None:  # a screen: skip starts where most rows have no state
         options["min_solved"] = MIN_SOLVED
 
@@ -118,7 +132,7 @@ def _fit(
     # A fit that solves every row first; among fits that all leave rows, the least misfit.
     cal, path = min(fits, key=lambda f: (f[0].unconverged > 0, f[0].chi2))
     if m.sequence is not None and max_nfev is None:  # full fits of data with a path
-        start = _prefix_start(design, m, effects, free, cal, sigma)
+        start = _prefix_start(design, m, effects, free, cal, sigma, priors)
         if start is not None:
             early, _ = fit(start, "driven")
             if early.unconverged == 0 and early.chi2 < cal.chi2:
@@ -163,6 +177,7 @@ def _cross_validated(
         for n in cal.names
         if np.isfinite(error[n]) and error[n] > 0
     }
+    priors = dict(cal.prior_width) or False
     held_out = cross_validate(
         design,
         m,
@@ -176,5 +191,8 @@ def _cross_validated(
         max_nfev=FOLD_EVALUATIONS,
         ordered=fit.ordered,
         anchor=anchor,
+        priors=priors,
+        posterior=cal.priors,
+        within=cal.within,
     )
     return replace(fit, cv_rmse_mm=held_out.rmse_mm, cv_expected_ratio=held_out.expected_ratio)

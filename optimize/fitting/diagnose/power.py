@@ -95,6 +95,8 @@ def power_of_data(
                 sigma=sigma,
                 max_nfev=SCREEN_EVALUATIONS,
                 free=final.calibration.names,
+                priors=dict(final.calibration.prior_width) or False,
+                within=final.calibration.within,
             )
             if fit.unsolved:
                 return {

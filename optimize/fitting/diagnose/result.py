@@ -13,6 +13,7 @@ from typing import Any, Literal
 import numpy as np
 
 from optimize.fitting.calibrate import FREE_PARAMETERS, CalibrationResult
+from optimize.fitting.calibrate.priors import prior_sigma_shown
 from optimize.fitting.structure import ResidualDependence
 
 
@@ -52,6 +53,7 @@ class Fit:
             "cv_rmse_mm": self.cv_rmse_mm,
             "params": parameter_values(self.calibration),
             "uncertainty": parameter_values(self.calibration, standard_error=True),
+            **prior_block(self.calibration),
         }
 
 
@@ -107,6 +109,7 @@ class Candidate:
             "params": parameter_values(f.calibration) if f else {},
             "uncertainty": parameter_values(f.calibration, standard_error=True) if f else {},
             "unsolved_rows": f.unsolved if f else None,
+            **(prior_block(f.calibration) if f else {"prior": {}, "pull": {}, "beyond_prior": {}}),
             "verdict": self.verdict,
         }
 
@@ -120,6 +123,7 @@ NULL_REASONS = {
     "bic": "the fit failed (see the verdict), or it fits the data exactly (a zero misfit)",
     "bic_change": "a BIC is undefined (see the candidate's verdict)",
     "uncertainty": "the data do not determine this parameter (it trades off with others)",
+    "sigma": "no prior on this parameter (a flat one: --prior NAME=inf)",
     "interval": "the profile likelihood could not be evaluated",
     "cv_rmse_ratio": "a cross-validated RMSE is undefined",
     "rmse_ratio": "an RMSE is undefined or zero",
@@ -156,8 +160,9 @@ class Diagnosis:
         that no candidate explains, with how large it is.
     candidates : every model tried, by name, with its fit and verdict.
     power : what the data could tell apart: per candidate not named, the RMS per
-        coordinate it would add, at nominal strength, beyond what the final model absorbs,
-        over the noise (:func:`power_of_data`).
+        coordinate it would add, at nominal strength, beyond what the final model absorbs
+        (the prior-bounded baseline where the baseline is not physical), over the noise
+        (:func:`power_of_data`).
     time_s : wall time. [s]
     """
 
@@ -170,6 +175,10 @@ class Diagnosis:
     candidates: dict[str, Candidate] = field(default_factory=dict)
     power: dict[str, dict[str, object]] = field(default_factory=dict)
     time_s: float = 0.0
+    bounded: Fit | None = None
+    """Where the calibrated baseline needs a parameter beyond PULL_LIMIT prior sigmas:
+    the baseline fitted within them, the model the candidates had to beat and the power
+    was judged against; else None."""
 
     def to_json(self) -> dict[str, Any]:
         """The diagnosis JSON of docs/formats.md, with optional extra keys; non-finite
@@ -210,6 +219,7 @@ class Diagnosis:
             "candidates": {k: c.to_json() for k, c in self.candidates.items()},
             "power": self.power,
             "time_s": self.time_s,
+            "baseline_within_priors": self.bounded.summary() if self.bounded else None,
         }
         nulls: dict[str, str] = {}
         out = finite_json(doc, "", nulls)
@@ -223,6 +233,31 @@ def report_key(name: str) -> tuple[str, float]:
     factor from SI to that unit."""
     label, factor = FREE_PARAMETERS[name].label
     return (f"{name}_{label.lower()}" if label else name), factor
+
+
+def prior_block(fit: CalibrationResult) -> dict[str, object]:
+    """The priors of ``fit``'s parameters in report units, by :func:`report_key`:
+    ``prior`` (the nominal value, the one-sigma width, and whether that width is of
+    ln(value / nominal), ``"log"``, or in the key's unit, ``"linear"``), ``pull`` (prior
+    sigmas moved, signed), ``beyond_prior`` (those beyond PULL_LIMIT) and ``physical``
+    (none is). A fit without priors is judged by the default ones."""
+    prior, pulls = {}, fit.pulls()
+    for name in fit.names:
+        key, factor = report_key(name)
+        spec = FREE_PARAMETERS[name]
+        prior[key] = {
+            "nominal": float(fit.nominal[name] * factor),
+            "sigma": prior_sigma_shown(name, fit.width(name)),
+            "scale": spec.kind,
+        }
+    beyond = {report_key(n)[0]: p for n, p in fit.beyond_prior().items()}
+    return {
+        "prior": prior,
+        "pull": {report_key(n)[0]: p for n, p in pulls.items()},
+        "beyond_prior": beyond,
+        "physical": not beyond,
+        "fitted_with_priors": fit.priors,
+    }
 
 
 def parameter_values(fit: CalibrationResult, standard_error: bool = False) -> dict[str, float]:
@@ -243,5 +278,6 @@ __all__ = [
     "Fit",
     "finite_json",
     "parameter_values",
+    "prior_block",
     "report_key",
 ]

@@ -20,6 +20,8 @@ from optimize.fitting.calibrate import (
     EFFECT_SEPARATES,
     FIELD_RELATIVE,
     FIELD_TOLERANCE,
+    PULL_LIMIT,
+    Priors,
     UnsolvedStart,
     default_free,
     predict,
@@ -37,6 +39,7 @@ from optimize.fitting.diagnose.evidence import (
     _not_applicable,
     _reason,
     _unexplained,
+    _unphysical,
 )
 from optimize.fitting.diagnose.fits import SCREEN_EVALUATIONS, Progress, _cross_validated, _fit
 from optimize.fitting.diagnose.power import power_of_data
@@ -78,6 +81,7 @@ def _refine(
     seed: int,
     sigma: float | None,
     say: Progress,
+    priors: bool | Priors = True,
 ) -> Fit:
     """The current model refitted with the parameters its effects make separable
     (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`, e.g. the field's strength under
@@ -103,10 +107,13 @@ def _refine(
             starts=[current.calibration],
             sigma=sigma,
             free=(*free, *extra),
+            priors=priors,
         )
         change = fit.bic() - current.bic()
-        if not change < -BIC_DROP:
-            verdict = f"rejected: BIC {change:+.1f}, not below -{BIC_DROP:g} (not cross-validated)"
+        why = f"not below -{BIC_DROP:g}" if not change < -BIC_DROP else _unphysical(fit)
+        if why:  # (a BIC that passes needing parameters beyond their priors: not physical)
+            why = why if why.startswith("not") else f"passes, but it {why}"
+            verdict = f"rejected: BIC {change:+.1f}, {why} (not cross-validated)"
             tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
             return current
         fit = _cross_validated(design, m, fit, k=k, seed=seed, sigma=sigma)
@@ -132,7 +139,7 @@ class Search:
     """The greedy forward selection of :func:`diagnose` (module docstring of
     :mod:`optimize.fitting.diagnose`), its state in its fields.
 
-    design, m, k, seed, sigma, say : as given to :func:`diagnose`.
+    design, m, k, seed, sigma, say, priors : as given to :func:`diagnose`.
     tried : every model tried so far, by name, with its verdict.
     remaining : the candidate effects not yet accepted (nor found not applicable).
     baseline, current : the calibrated baseline and the current model (cross-validated).
@@ -141,6 +148,9 @@ class Search:
     screened : each effect's own estimates from its last single screen.
     refit_from : models whose estimates the current model was refitted from.
     ahead : the background worker's screening jobs of the first round (or None).
+    bounded : where the calibrated baseline needs a parameter beyond its prior, the
+        baseline fitted within PULL_LIMIT prior sigmas (what it can do physically): the
+        model candidates must beat (:attr:`reference`); else None.
     """
 
     def __init__(
@@ -153,8 +163,10 @@ class Search:
         seed: int,
         sigma: float | None,
         progress: Progress | None,
+        priors: bool | Priors = True,
     ) -> None:
         self.design, self.m, self.k, self.seed, self.sigma = design, m, k, seed, sigma
+        self.priors = priors
         self.say: Progress = progress or (lambda _: None)
         self.tried: dict[str, Candidate] = {}
         self.remaining: list[str] = []
@@ -171,6 +183,8 @@ class Search:
         self.screened: dict[str, dict[str, float]] = {}
         self.refit_from: set[str] = set()
         self.ahead: Background[Job, Fit | Exception] | None = None
+        self.bounded: Fit | None = None
+        self.baseline_within: Fit | None = None
 
     # -------------------------------------------------------------------- the fits
 
@@ -181,6 +195,18 @@ class Search:
         position = predict(model, fit.calibration.params, m, _bench_path(m)).equilibria.position
         position = np.where(np.isfinite(position), position, m.position)
         return residual_structure(fit.calibration.residuals, features(self.design, m, position))
+
+    @property
+    def reference(self) -> Fit:
+        """The model a candidate must beat: the current one, or while that is the
+        baseline and needs a parameter beyond its prior, the prior-bounded baseline (a
+        candidate explains the data only if it does better than the baseline can with
+        physical parameters)."""
+        return self.bounded if self.bounded is not None else self.current
+
+    def explained(self) -> bool:
+        """The reference model's residual is consistent with the stated noise."""
+        return _noise_consistent(self.reference, self.m)
 
     def free_for(self, effects: frozenset[str]) -> tuple[str, ...]:
         """The free parameters of ``effects`` as a candidate on top of ``current``."""
@@ -194,8 +220,14 @@ class Search:
         cv: bool = False,
         max_nfev: int | None = None,
         free: Sequence[str] = (),
+        within: float | None = None,
     ) -> Fit:
-        """:func:`_fit` with this search's data, folds and noise."""
+        """:func:`_fit` with this search's data, folds, noise and priors; while the
+        baseline is not physical (``bounded``), every fit within PULL_LIMIT prior sigmas:
+        a candidate must explain the data with physical parameters (from the baseline's
+        estimates a local fit stays where it moved the magnet)."""
+        if within is None and self.bounded is not None:
+            within = PULL_LIMIT
         return _fit(
             self.design,
             self.m,
@@ -207,6 +239,8 @@ class Search:
             sigma=self.sigma,
             max_nfev=max_nfev,
             free=free,
+            priors=self.priors,
+            within=within,
         )
 
     def cross_validated(self, fit: Fit) -> Fit:
@@ -247,7 +281,7 @@ class Search:
         :func:`_fit` keeps it (one that solves every row, then the least misfit); failed
         with the first error if any start's fit failed, or if every start was skipped
         (:class:`optimize.fitting.calibrate.UnsolvedStart`)."""
-        current = self.current
+        current = self.reference
         fits = [r for r in outcomes if isinstance(r, Fit)]
         errors = [r for r in outcomes if not isinstance(r, Fit | UnsolvedStart)]
         if fits and not errors:
@@ -261,8 +295,11 @@ class Search:
         ``tried``: every start of every candidate is a job of its own, in parallel
         (:mod:`optimize.fitting.workers`), those of the large-deflection rod (the costliest
         to solve) first, so the workers finish together; a candidate keeps its best start
-        as :func:`_fit` would (one that solves every row, then the least misfit)."""
-        current = self.current
+        as :func:`_fit` would (one that solves every row, then the least misfit). While the
+        baseline is not physical the screens start from the prior-bounded baseline
+        (:attr:`reference`), not from the estimates beyond the priors (clipped to the
+        bounds, a start in the mimic's basin)."""
+        current = self.reference
         effects = [current.effects | a for a in added]
         for e in effects:
             built_model(e)
@@ -301,10 +338,13 @@ class Search:
         return found
 
     def in_full(self, c: Candidate) -> Candidate:
-        """The candidate ``c`` fitted in full from its screen's estimates."""
+        """The candidate ``c`` fitted in full from its screen's estimates; while the
+        baseline is not physical also from the nominal design (planted set [15, 4, 1],
+        gravity: 6.6 mm RMS from the screen's, in a basin of the bounds, 0.24 mm from it)."""
         assert c.fit is not None
         free = self.free_for(c.effects)
-        return self.candidate(c.effects, [self.fitted(c.effects, c.fit.calibration, free, None)])
+        starts: list[Start] = [c.fit.calibration, *([None] if self.bounded is not None else [])]
+        return self.candidate(c.effects, [self.fitted(c.effects, s, free, None) for s in starts])
 
     def decide(self, round_: list[Candidate]) -> Candidate | None:
         """Fit in full every candidate whose screening BIC falls by more than BIC_DROP (in
@@ -329,6 +369,9 @@ class Search:
         for full in parallel_map(self.in_full, passing):
             if full.fit is None or not full.bic_change < -BIC_DROP:
                 tried[full.name] = replace(full, verdict=full.verdict or _bic_verdict(full))
+            elif why := _unphysical(full.fit):  # it explains the data only unphysically
+                verdict = f"rejected: BIC {full.bic_change:+.1f} passes, but it {why}"
+                tried[full.name] = replace(full, verdict=verdict)
             else:
                 ranked.append(full)
         ranked.sort(key=_bic_order)
@@ -341,7 +384,7 @@ class Search:
                 reason = f"fit failed: cross-validation: {_reason(exc)}"
                 tried[full.name] = replace(full, fit=None, bic_change=math.nan, verdict=reason)
                 continue
-            before, after = self.current.cv_rmse_mm, fit.cv_rmse_mm
+            before, after = self.reference.cv_rmse_mm, fit.cv_rmse_mm
             text = f"cross-validated RMSE {before:.3g} -> {after:.3g} mm"
             if not _cv_pays(before, after):
                 tried[full.name] = replace(
@@ -367,8 +410,10 @@ class Search:
     def unexplained_left(self) -> bool:
         """The current model's residual still has structure, or exceeds the stated noise."""
         stated = np.isfinite(self.m.sigma).any()
-        return any(d.p_value < STRUCTURE_P for d in self.s_current) or bool(
-            stated and not _noise_consistent(self.current, self.m)
+        return (
+            self.bounded is not None
+            or any(d.p_value < STRUCTURE_P for d in self.s_current)
+            or bool(stated and not _noise_consistent(self.current, self.m))
         )
 
     # ------------------------------------------------------------------ the search
@@ -386,11 +431,19 @@ class Search:
         self.say("baseline")
         first = self.fit(frozenset(), starts=[None])
         self.ahead = background
-        if _noise_consistent(first, self.m) or first.calibration.names != base_names:
+        screened = not _noise_consistent(first, self.m) or bool(_unphysical(first))
+        if not screened or first.calibration.names != base_names:
             background.cancel()  # not screened, or not on top of these free parameters
             self.ahead = None
         self.current = self.cross_validated(first)
         self.baseline = self.current
+        if _unphysical(first):
+            if self.ahead is not None:  # its fits are not bounded by the priors
+                self.ahead.cancel()
+                self.ahead = None
+            self.say("baseline within its priors")
+            self.bounded = self.fit(frozenset(), starts=[None], within=PULL_LIMIT, cv=True)
+        self.baseline_within = self.bounded  # (for the result; ``bounded`` ends with it)
         self.s_base = self.structure(self.baseline)
         self.s_current = self.s_base
 
@@ -422,7 +475,12 @@ class Search:
             self.say(f"refitting {current.name} from the estimates of {f.name}")
             free = current.calibration.names
             refit = self.fit(current.effects, starts=[f.calibration], free=free)
-            if refit.bic() < current.bic() - 1e-6 and not f.bic() - refit.bic() < -BIC_DROP:
+            reference = self.reference
+            if (
+                refit.bic() < reference.bic() - 1e-6
+                and not f.bic() - refit.bic() < -BIC_DROP
+                and not _unphysical(refit)
+            ):
                 self.tried[f.name] = replace(
                     accepted,
                     verdict=f"rejected: refitting {current.name} from its estimates closes "
@@ -432,13 +490,15 @@ class Search:
                     current.effects, starts=[refit.calibration], cv=True, free=free
                 )
                 self.s_current = self.structure(self.current)
+                self.bounded = None  # (physical: checked above)
                 if not self.current.effects:
                     self.baseline, self.s_base = self.current, self.s_current
                 return True
         s_new = self.structure(f)
         added = sorted(f.effects - current.effects)
-        self.steps.append((added, current, f, self.s_current, s_new))
+        self.steps.append((added, self.reference, f, self.s_current, s_new))
         self.current, self.s_current = f, s_new
+        self.bounded = None  # an accepted candidate is physical (decide)
         self.remaining = [r for r in remaining if r not in added]
         refined = _refine(
             self.design,
@@ -449,6 +509,7 @@ class Search:
             seed=self.seed,
             sigma=self.sigma,
             say=self.say,
+            priors=self.priors,
         )
         if refined is not self.current:
             self.current, self.s_current = refined, self.structure(refined)
@@ -460,7 +521,7 @@ class Search:
             self.ahead.cancel()
             self.ahead = None
         current = self.current
-        if self.remaining and _noise_consistent(current, self.m):
+        if self.remaining and self.explained() and not _unphysical(current):
             for name in self.remaining:
                 effects = current.effects | {name}
                 if "+".join(sorted(effects)) not in self.tried:
@@ -527,13 +588,13 @@ class Search:
         if self.remaining:
             self.say("power of the data for " + ", ".join(self.remaining))
         for name in self.remaining:
-            built_model(self.current.effects | {name})
+            built_model(self.reference.effects | {name})
         found = parallel_map(self.power_of, self.remaining)
         return dict(zip(self.remaining, found, strict=True))
 
     def power_of(self, effect: str) -> dict[str, object]:
         """:func:`power_of_data` of ``effect`` against the current model."""
-        return power_of_data(self.design, self.m, self.current, effect, self.sigma)
+        return power_of_data(self.design, self.m, self.reference, effect, self.sigma)
 
 
 def diagnose(
@@ -545,6 +606,7 @@ def diagnose(
     seed: int = 0,
     sigma: float | None = None,
     progress: Progress | None = None,
+    priors: bool | Priors = True,
 ) -> Diagnosis:
     """Find which model effects the measurements ``m`` of ``design`` call for.
 
@@ -553,14 +615,23 @@ def diagnose(
     k : folds of the cross-validation over configurations. seed : its shuffling.
     sigma : one-sigma position noise for rows that do not state one. [m]
     progress : called with a short message before each fit.
+    priors : what the bench knows (:mod:`optimize.fitting.calibrate.priors`: True, the
+        defaults; a mapping, widths overridden; False, none: the diagnosis before priors):
+        a model explains the data only with every estimate within PULL_LIMIT prior sigmas
+        of its nominal value. The fits stay least squares (a baseline within its priors
+        is fitted, and diagnosed, as without them); where the calibrated baseline needs a
+        parameter beyond them, the baseline fitted within them (bounded to PULL_LIMIT
+        sigmas) is the model candidates must beat, and the power is judged against it.
 
     A candidate whose fit fails is reported (``candidates``, 'fit failed: ...') and the
     search goes on without it.
     """
     t0 = time.perf_counter()
-    search = Search(design, m, candidates, k=k, seed=seed, sigma=sigma, progress=progress)
+    search = Search(
+        design, m, candidates, k=k, seed=seed, sigma=sigma, progress=progress, priors=priors
+    )
     search.start()
-    while search.remaining and not _noise_consistent(search.current, m):
+    while search.remaining and not (search.explained() and not _unphysical(search.current)):
         if not search.round():
             break
     search.finish()
@@ -576,4 +647,5 @@ def diagnose(
         candidates=search.tried,
         power=power,
         time_s=time.perf_counter() - t0,
+        bounded=search.baseline_within,
     )

@@ -19,6 +19,7 @@ from optimize.fitting.calibrate import (
     NESTED_START,
     SOFT_START,
     CalibrationResult,
+    Priors,
     UnsolvedStart,
     calibrate,
     default_free,
@@ -91,6 +92,7 @@ def _prefix_start(
     free: Sequence[str],
     fitted: CalibrationResult,
     sigma: float | None,
+    priors: bool | Priors = True,
 ) -> dict[str, float] | None:
     """The fit of the path's first rows (PREFIX_SHARE, PREFIX_PER_PARAMETER) from the
     nominal design, where ``fitted`` (the fit of the whole path) misses those rows by more
@@ -104,7 +106,16 @@ def _prefix_start(
     early = np.zeros(len(m), bool)
     early[order[:rows]] = True
     try:
-        own = calibrate(design, m.subset(early), effects, free, ordered="driven", sigma=sigma)
+        own = calibrate(
+            design,
+            m.subset(early),
+            effects,
+            free,
+            ordered="driven",
+            sigma=sigma,
+            priors=priors,
+            posterior=False,
+        )
     except UnsolvedStart:
         return None
     mine = own.errors[np.isfinite(own.errors)]
