@@ -220,6 +220,7 @@ def _pulls(cal: CalibrationResult) -> str:
     from optimize.fitting.calibrate import FREE_PARAMETERS, PULL_LIMIT
 
     parts = []
+    beyond = cal.beyond_prior()
     for row in cal.table():
         unit = f" {row['unit']}" if row["unit"] else ""
         width = float(cast(float, row["prior_sigma"]))
@@ -229,7 +230,12 @@ def _pulls(cal: CalibrationResult) -> str:
             sigma = f"a factor {math.exp(width):.3g}"
         else:
             sigma = f"{width:.3g}{unit}"
-        mark = " (beyond the prior)" if abs(cast(float, row["pull"])) > PULL_LIMIT else ""
+        name = str(row["name"])
+        mark = ""
+        if name in beyond:
+            mark = " (beyond the prior)"
+        elif abs(cast(float, row["pull"])) > PULL_LIMIT:
+            mark = f" (the data do not pin it there: conflict {cal.conflict():.1f} sigmas)"
         parts.append(
             f"{row['name']} {row['estimate']:.5g}{unit} (nominal {row['nominal']:.5g}, prior "
             f"sigma {sigma}, pull {row['pull']:+.1f}){mark}"

@@ -8,8 +8,19 @@ import sys
 from ringpair.cli import cli
 
 COMMANDS = {
-    "branch", "cad", "calibrate", "diagnose", "effects", "force", "optimize", "show", "simulate",
-    "steer", "study", "synth", "workspace",
+    "branch",
+    "cad",
+    "calibrate",
+    "diagnose",
+    "effects",
+    "force",
+    "optimize",
+    "show",
+    "simulate",
+    "steer",
+    "study",
+    "synth",
+    "workspace",
 }
 
 

@@ -19,7 +19,10 @@ A calibration with priors maximises the posterior: one Gaussian residual
 (u - u_nominal) / width per free parameter is appended to the weighted data residuals
 (:func:`optimize.fitting.calibrate.calibrate`). Each estimate's *pull* is how many prior
 sigmas it moved, (u - u_nominal) / width; a fit that needs one beyond PULL_LIMIT is not
-physical, and a model that needs it does not explain the data.
+physical, and a model that needs it does not explain the data. A least-squares fit
+*needs* it only where the data pin the estimate away from nominal (:func:`conflict`, the
+prior-data conflict, beyond PULL_LIMIT too); an estimate that wandered beyond along a
+direction the data leave free is not needed there.
 
 Overrides, by key: a linearly fitted parameter's one sigma in its file unit with the
 unit's suffix (``external_center_x_mm = 3``; a vector's key without the axis sets all
@@ -36,6 +39,8 @@ import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+
+import numpy as np
 
 from design.registry import FILE_UNITS, PARAMETERS
 from optimize.fitting.calibrate.policy import FREE_PARAMETERS
@@ -165,6 +170,29 @@ def pull(name: str, value: float, nominal: float, width: float) -> float:
     return u / width
 
 
+def conflict(offset: np.ndarray, width: np.ndarray, data_covariance: np.ndarray) -> float:
+    """How far a least-squares estimate lies from the nominal design once the priors'
+    and the data's own uncertainty are both counted: the prior-data conflict
+    sqrt(d^T (W + S)^-1 d), d the estimate's offset from nominal, W the priors' and S the
+    data's covariance (all in fit units). It is the largest pull of any combination of the
+    parameters, a^T d / sqrt(a^T (W + S) a) over all a, and for one parameter
+    d / sqrt(w^2 + s^2): where the bench is as its priors say, the truth lies about
+    nominal with W and the estimate about the truth with S (linear Gaussian). Its square
+    is the misfit a fit at the priors' centre adds to the least-squares one, to first
+    order. An estimate that wandered far along a direction the data leave free (a far
+    magnet's distance traded against the rod's stiffness) is in no conflict; one the data
+    pin there, even through parameters that trade off, is. Parameters without a prior
+    (infinite width) or that the data do not determine (non-finite variance) are left
+    out; 0 where none is left. [-]"""
+    d, w, cov = (np.asarray(a, dtype=float) for a in (offset, width, data_covariance))
+    keep = np.isfinite(w) & np.isfinite(d) & np.isfinite(np.diag(cov))
+    cov = np.nan_to_num(cov[np.ix_(keep, keep)], nan=0.0)  # an undetermined one's NaNs
+    if not keep.any():
+        return 0.0
+    d = d[keep]
+    return math.sqrt(max(float(d @ np.linalg.solve(np.diag(w[keep] ** 2) + cov, d)), 0.0))
+
+
 def prior_sigma_shown(name: str, width: float) -> float:
     """A prior width in report units: for a linearly fitted parameter in its report
     unit (mm, deg, g), for a log-fitted one the one sigma of ln(value / nominal). [-]"""
@@ -178,6 +206,7 @@ __all__ = [
     "PRIORS_FILE",
     "PULL_LIMIT",
     "Priors",
+    "conflict",
     "load_priors",
     "parse_prior_options",
     "parse_priors",

@@ -13,7 +13,7 @@ import numpy as np
 from design.geometry import rest_position
 from design.registry import index
 from optimize.fitting.calibrate.policy import FREE_PARAMETERS
-from optimize.fitting.calibrate.priors import PULL_LIMIT, prior_sigma_shown, pull
+from optimize.fitting.calibrate.priors import PULL_LIMIT, conflict, prior_sigma_shown, pull
 from optimize.fitting.measurements import Measurements
 
 DEFAULT_SIGMA = 1e-3
@@ -118,10 +118,35 @@ class CalibrationResult:
             return self.prior_width[name]
         return math.inf if self.priors else float(FREE_PARAMETERS[name].prior)
 
+    def conflict(self) -> float:
+        """The prior-data conflict of the estimates: the largest pull of any combination
+        of them, counting the data's uncertainty
+        (:func:`optimize.fitting.calibrate.priors.conflict`, from the data's standard
+        errors and correlation). For a posterior fit (``priors``), whose estimates the
+        priors already shrank, the largest pull, a lower bound of it. [-]"""
+        pulls = self.pulls()
+        if self.priors:
+            return max((abs(p) for p in pulls.values()), default=0.0)
+        offset, width, error = [], [], []
+        for n in self.names:
+            spec = FREE_PARAMETERS[n]
+            scale = abs(self.estimate[n]) if spec.kind == "log" else spec.step
+            w = self.width(n)
+            offset.append(pulls[n] * w if math.isfinite(w) else math.nan)
+            width.append(w)
+            error.append(self.data_standard_error.get(n, self.standard_error[n]) / scale)
+        s = np.array(error)
+        corr = self.data_correlation if self.data_correlation is not None else self.correlation
+        return conflict(np.array(offset), np.array(width), np.outer(s, s) * corr)
+
     def beyond_prior(self, limit: float = PULL_LIMIT) -> dict[str, float]:
-        """The estimates more than ``limit`` prior sigmas from nominal, with their pulls:
-        not physical (:mod:`optimize.fitting.calibrate.priors`). [-]"""
-        return {n: p for n, p in self.pulls().items() if abs(p) > limit}
+        """The estimates more than ``limit`` prior sigmas from nominal where the data need
+        them there (the :meth:`conflict` beyond ``limit`` too), with their pulls: not
+        physical (:mod:`optimize.fitting.calibrate.priors`). Estimates beyond only because
+        the data do not determine them (they wandered along a direction the data leave
+        free) are not. [-]"""
+        beyond = {n: p for n, p in self.pulls().items() if abs(p) > limit}
+        return beyond if beyond and self.conflict() > limit else {}
 
     def table(self) -> list[dict[str, object]]:
         """One row per parameter in report units: name, unit, nominal, estimate, standard

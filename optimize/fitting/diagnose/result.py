@@ -239,8 +239,10 @@ def prior_block(fit: CalibrationResult) -> dict[str, object]:
     """The priors of ``fit``'s parameters in report units, by :func:`report_key`:
     ``prior`` (the nominal value, the one-sigma width, and whether that width is of
     ln(value / nominal), ``"log"``, or in the key's unit, ``"linear"``), ``pull`` (prior
-    sigmas moved, signed), ``beyond_prior`` (those beyond PULL_LIMIT) and ``physical``
-    (none is). A fit without priors is judged by the default ones."""
+    sigmas moved, signed), ``conflict`` (the prior-data conflict in sigmas,
+    :meth:`CalibrationResult.conflict`), ``beyond_prior`` (the pulls beyond PULL_LIMIT,
+    where the conflict is too) and ``physical`` (none is). A fit
+    without priors is judged by the default ones."""
     prior, pulls = {}, fit.pulls()
     for name in fit.names:
         key, factor = report_key(name)
@@ -254,6 +256,7 @@ def prior_block(fit: CalibrationResult) -> dict[str, object]:
     return {
         "prior": prior,
         "pull": {report_key(n)[0]: p for n, p in pulls.items()},
+        "conflict": fit.conflict(),
         "beyond_prior": beyond,
         "physical": not beyond,
         "fitted_with_priors": fit.priors,

@@ -98,6 +98,72 @@ def test_a_magnet_20_mm_off_is_found_there_and_violates_its_prior():
     assert tight.chi2 > fit.chi2 and tight.beyond_prior()["external_center_y"] > PULL_LIMIT
 
 
+def test_the_conflict_is_the_misfit_the_priors_add_to_a_least_squares_estimate():
+    """Linear Gaussian closed form, checked by a second, separate computation: k
+    parameters with a least-squares estimate d (offset from nominal, fit units) of data
+    covariance S and priors N(0, W); the posterior's least objective,
+    min_u (u - d)^T S^-1 (u - d) + u^T W^-1 u, found here by scipy's minimiser, is the
+    conflict squared; and no single parameter's pull counted against both uncertainties,
+    d_i / sqrt(w_i^2 + S_ii), exceeds it. Drawn covariances with correlations up to
+    0.999 (parameters that trade off), widths and errors over several decades; a
+    parameter without a prior or that the data leave undetermined is left out."""
+    from scipy.optimize import minimize
+
+    from optimize.fitting.calibrate.priors import conflict
+
+    seed = int(np.random.SeedSequence().entropy % 2**32)
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        k = int(rng.integers(1, 5))
+        w = 10 ** rng.uniform(-1, 1.5, k)
+        a = rng.normal(size=(k, k)) * 10 ** rng.uniform(-2, 2, k)[:, None]
+        cov = a @ a.T + 1e-3 * np.diag(10 ** rng.uniform(-2, 2, k)) ** 2
+        d = rng.normal(0, 3, k) * w
+        inv = np.linalg.inv(cov)
+        best = minimize(
+            lambda u, d=d, inv=inv, w=w: (u - d) @ inv @ (u - d) + np.sum(u**2 / w**2),
+            np.zeros(k),
+            method="BFGS",
+            options={"gtol": 1e-10},
+        ).fun
+        z = conflict(d, w, cov)
+        assert z**2 == pytest.approx(best, rel=1e-4, abs=1e-6), f"seed {seed}: k {k}"
+        marginal = np.abs(d) / np.sqrt(w**2 + np.diag(cov))
+        assert marginal.max() <= z * (1 + 1e-9), f"seed {seed}: k {k}"
+        if k > 1:  # left out: no prior on the last, or the data do not determine it
+            cut = conflict(d[:-1], w[:-1], cov[:-1, :-1])
+            loose = cov.copy()
+            loose[-1, :] = loose[:, -1] = np.nan
+            loose[-1, -1] = np.inf
+            assert conflict(d, np.r_[w[:-1], np.inf], cov) == pytest.approx(cut), f"seed {seed}"
+            assert conflict(d, w, loose) == pytest.approx(cut), f"seed {seed}"
+    assert conflict(np.array([5.0]), np.array([np.inf]), np.eye(1)) == 0.0
+
+
+@pytest.mark.slow
+def test_an_estimate_the_data_leave_free_is_not_needed_beyond_its_prior():
+    """A null set (nothing planted, 15 rows in 3-D, a far magnet at 294 mm, 0.45 mm
+    noise: the draw of seed 1199480917 that failed CI): least squares moves the magnet
+    50 mm (10 prior sigmas) and the rod's rigidity down 5x along a direction the data do
+    not fix (standard errors 326 mm and a factor e^9.6). The data do not need either:
+    their conflict with the priors is small (0.6 sigmas here), the fit is physical and
+    nothing is said unexplained."""
+    from optimize.fitting.diagnose import _fit, _unexplained
+    from optimize.fitting.planted import draw_planted
+
+    case = draw_planted(np.random.default_rng(1199480917), frozenset(), points=(16, 16))
+    m = case.measurements
+    m.sigma[:] = np.nan
+    fit = _fit(case.design, m, frozenset(), k=5, seed=0, cv=False, starts=[None], sigma=None)
+    cal = fit.calibration
+    pulls = cal.pulls()
+    why = f"{case.describe()}: pulls {pulls}, conflict {cal.conflict():.3g}"
+    assert max(abs(p) for p in pulls.values()) > PULL_LIMIT, why  # the premise
+    assert cal.conflict() < 1.0, why
+    assert not cal.beyond_prior(), why
+    assert _unexplained(m, fit, ()) == "", why
+
+
 @pytest.mark.parametrize("draw", range(3))
 def test_as_built_deviations_drawn_across_the_design_space_stay_within_the_priors(draw):
     """Null bench data of random set-ups with the benchmark's as-built deviations (moduli
@@ -105,11 +171,14 @@ def test_as_built_deviations_drawn_across_the_design_space_stay_within_the_prior
     beyond PULL_LIMIT prior sigmas."""
     seed = int(np.random.SeedSequence().entropy % 2**32)
     rng = np.random.default_rng(seed)
-    design = random_design(rng)
-    truth = as_built(rng, design)
-    m = synthesize_data(
-        design, (), n=16, noise_mm=0.3, seed=seed % 1000, params_override=truth
-    ).measurements
+    while True:  # a set-up whose rows mostly have a state (some draws pull every tip
+        design = random_design(rng)  # into the magnet: nothing to fit, e.g. seed 29)
+        truth = as_built(rng, design)
+        m = synthesize_data(
+            design, (), n=16, noise_mm=0.3, seed=seed % 1000, params_override=truth
+        ).measurements
+        if m.measured.sum() >= 2 * len(m):
+            break
     fit = calibrate(design, m, (), priors=True)
     why = f"seed {seed}: pulls {fit.pulls()}"
     assert not fit.beyond_prior(), why

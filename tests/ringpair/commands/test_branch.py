@@ -11,8 +11,17 @@ from ringpair.cli import cli
 def test_branch_draws_the_diagram_and_names_the_snap(tmp_path, run):
     out = tmp_path / "branch.png"
     result = run(
-        "branch", "--effects", "near_field,torsion", "--theta1", "30", "--theta2", "30",
-        "--points", "81", "--out", str(out),
+        "branch",
+        "--effects",
+        "near_field,torsion",
+        "--theta1",
+        "30",
+        "--theta2",
+        "30",
+        "--points",
+        "81",
+        "--out",
+        str(out),
     )
     assert result.exit_code == 0, result.output
     # The demonstrator's touching rings (kappa = 1.9) snap apart part way up the ramp.

@@ -78,7 +78,14 @@ def test_simulate_writes_the_tip_stiffness_of_beam_theory_with_the_field_off(
     path.write_bytes(tomli_w.dumps(doc).encode())
     out = tmp_path / "far.csv"
     result = run(
-        "simulate", str(path), "--effects", "none", "--theta1", "0,90", "--out", str(out),
+        "simulate",
+        str(path),
+        "--effects",
+        "none",
+        "--theta1",
+        "0,90",
+        "--out",
+        str(out),
         "--quiet",
     )
     assert result.exit_code == 0, result.output
