@@ -145,8 +145,13 @@ class CalibrationResult:
         physical (:mod:`optimize.fitting.calibrate.priors`). Estimates beyond only because
         the data do not determine them (they wandered along a direction the data leave
         free) are not. [-]"""
-        beyond = {n: p for n, p in self.pulls().items() if abs(p) > limit}
+        beyond = self.outside_prior(limit)
         return beyond if beyond and self.conflict() > limit else {}
+
+    def outside_prior(self, limit: float = PULL_LIMIT) -> dict[str, float]:
+        """The estimates more than ``limit`` prior sigmas from nominal, with their pulls,
+        whether or not the data need them there (:meth:`beyond_prior`). [-]"""
+        return {n: p for n, p in self.pulls().items() if abs(p) > limit}
 
     def table(self) -> list[dict[str, object]]:
         """One row per parameter in report units: name, unit, nominal, estimate, standard

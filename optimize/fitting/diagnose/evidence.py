@@ -175,6 +175,13 @@ def _unphysical(fit: Fit) -> str:
     return f"needs {', '.join(parts)}: beyond {PULL_LIMIT:g} prior sigmas, not physical"
 
 
+def _outside_priors(fit: Fit) -> bool:
+    """Whether an estimate of ``fit`` lies beyond PULL_LIMIT prior sigmas, needed by the
+    data or not (a fit that wandered along a direction they leave free): such a fit is
+    no physical start, and the search fits within the priors from then on. [-]"""
+    return bool(fit.calibration.prior_width and fit.calibration.outside_prior())
+
+
 def _unexplained(m: Measurements, fit: Fit, s: Sequence[ResidualDependence]) -> str:
     """What the final model leaves unexplained, and how large it is ('' if nothing); a
     final model that needs a parameter beyond its prior (:func:`_unphysical`) does not

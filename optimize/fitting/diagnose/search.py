@@ -37,6 +37,7 @@ from optimize.fitting.diagnose.evidence import (
     _cv_pays,
     _noise_consistent,
     _not_applicable,
+    _outside_priors,
     _reason,
     _unexplained,
     _unphysical,
@@ -431,13 +432,13 @@ class Search:
         self.say("baseline")
         first = self.fit(frozenset(), starts=[None])
         self.ahead = background
-        screened = not _noise_consistent(first, self.m) or bool(_unphysical(first))
+        screened = not _noise_consistent(first, self.m) or _outside_priors(first)
         if not screened or first.calibration.names != base_names:
             background.cancel()  # not screened, or not on top of these free parameters
             self.ahead = None
         self.current = self.cross_validated(first)
         self.baseline = self.current
-        if _unphysical(first):
+        if _outside_priors(first):  # (needed by the data or not: no physical start)
             if self.ahead is not None:  # its fits are not bounded by the priors
                 self.ahead.cancel()
                 self.ahead = None
