@@ -20,7 +20,7 @@ Method (the result format is docs/formats.md's diagnosis JSON):
    structure remains, pairs.
    After each acceptance, refit the model with the parameters its effects make
    separable also free (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`: the field's
-   strength under gravity), kept if that pays by the same two tests (:func:`_refine`);
+   strength under gravity), kept if that pays by the same two tests (:func:`.refine._refine`);
    the candidates of later rounds free them too.
 4. Name each accepted cause with its evidence (the residual structure it removes, the
    cross-validated gain, its parameters as the final model estimates them with 1-sigma
@@ -51,9 +51,10 @@ for each. SI units inside; the ``*_mm`` figures are millimetres.
 
 One concept per module: the search (:mod:`.search`, a class whose state is its fields),
 a candidate's fit (:mod:`.fits`), its starts (:mod:`.starts`), the scans for better ones
-(:mod:`.scans`), the power of the data (:mod:`.power`), the verdicts and evidence
-(:mod:`.evidence`) and the result with its JSON (:mod:`.result`); this package
-re-exports their names.
+(:mod:`.scans`), the refit after an acceptance (:mod:`.refine`), the power of the data
+(:mod:`.power`), the verdicts and evidence (:mod:`.evidence`), the causes named with
+their intervals (:mod:`.causes`) and the result with its JSON (:mod:`.result`); this
+package re-exports their names.
 """
 
 from __future__ import annotations
@@ -83,6 +84,7 @@ from optimize.fitting.diagnose.power import (
     REFITTED_POWER,
     power_of_data,
 )
+from optimize.fitting.diagnose.refine import _refine
 from optimize.fitting.diagnose.result import (
     NULL_REASONS,
     Candidate,
@@ -106,7 +108,7 @@ from optimize.fitting.diagnose.scans import (
     _parameters,
     _scan,
 )
-from optimize.fitting.diagnose.search import Search, _refine, diagnose
+from optimize.fitting.diagnose.search import Search, diagnose
 from optimize.fitting.diagnose.starts import STIFF_FIRST, STIFFER, screen_starts
 from optimize.fitting.structure import ResidualDependence, residual_structure
 

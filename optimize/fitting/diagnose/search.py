@@ -17,9 +17,6 @@ from design.model import model_for
 from design.records import Design
 from optimize.fitting.calibrate import (
     EFFECT_FREE,
-    EFFECT_SEPARATES,
-    FIELD_RELATIVE,
-    FIELD_TOLERANCE,
     PULL_LIMIT,
     Priors,
     UnsolvedStart,
@@ -28,12 +25,12 @@ from optimize.fitting.calibrate import (
     row_sigma,
     stiff_start,
 )
+from optimize.fitting.diagnose.causes import Step, accepted_causes
 from optimize.fitting.diagnose.evidence import (
     BIC_DROP,
     CV_GAIN,
     _bic_order,
     _bic_verdict,
-    _cause,
     _cv_pays,
     _noise_consistent,
     _not_applicable,
@@ -44,6 +41,7 @@ from optimize.fitting.diagnose.evidence import (
 )
 from optimize.fitting.diagnose.fits import SCREEN_EVALUATIONS, Progress, _cross_validated, _fit
 from optimize.fitting.diagnose.power import power_of_data
+from optimize.fitting.diagnose.refine import _refine
 from optimize.fitting.diagnose.result import (
     Candidate,
     Cause,
@@ -60,7 +58,6 @@ from optimize.fitting.diagnose.starts import (
     _soft_start,
     screen_starts,
 )
-from optimize.fitting.likelihood import Interval, profile_intervals, widened
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.sensitivity import built_model
 from optimize.fitting.structure import (
@@ -70,70 +67,6 @@ from optimize.fitting.structure import (
     residual_structure,
 )
 from optimize.fitting.workers import Background, parallel_map
-
-
-def _refine(
-    design: Design,
-    m: Measurements,
-    current: Fit,
-    tried: dict[str, Candidate],
-    *,
-    k: int,
-    seed: int,
-    sigma: float | None,
-    say: Progress,
-    priors: bool | Priors = True,
-) -> Fit:
-    """The current model refitted with the parameters its effects make separable
-    (:data:`optimize.fitting.calibrate.EFFECT_SEPARATES`, e.g. the field's strength under
-    gravity) also free, if that pays as an effect must (BIC, then cross-validated RMSE:
-    a refit whose BIC does not pass is not cross-validated); else ``current``. The refit
-    is recorded in ``tried`` either way."""
-    free = current.calibration.names
-    extra = [
-        n for e in sorted(current.effects) for n in EFFECT_SEPARATES.get(e, ()) if n not in free
-    ]
-    if not extra:
-        return current
-    name = f"{current.name} ({', '.join(extra)} freed)"
-    say(f"refitting {name}")
-    try:
-        fit = _fit(
-            design,
-            m,
-            current.effects,
-            k=k,
-            seed=seed,
-            cv=False,
-            starts=[current.calibration],
-            sigma=sigma,
-            free=(*free, *extra),
-            priors=priors,
-        )
-        change = fit.bic() - current.bic()
-        why = f"not below -{BIC_DROP:g}" if not change < -BIC_DROP else _unphysical(fit)
-        if why:  # (a BIC that passes needing parameters beyond their priors: not physical)
-            why = why if why.startswith("not") else f"passes, but it {why}"
-            verdict = f"rejected: BIC {change:+.1f}, {why} (not cross-validated)"
-            tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
-            return current
-        fit = _cross_validated(design, m, fit, k=k, seed=seed, sigma=sigma)
-    except Exception as exc:  # reported; the final model stays
-        tried[name] = Candidate(
-            current.effects, current.name, None, math.nan, f"fit failed: {_reason(exc)}"
-        )
-        return current
-    before, after = current.cv_rmse_mm, fit.cv_rmse_mm
-    text = f"BIC {change:+.1f}, cross-validated RMSE {before:.3g} -> {after:.3g} mm"
-    better = _cv_pays(before, after)
-    verdict = f"accepted: {text}" if better else f"rejected: {text}"
-    tried[name] = Candidate(current.effects, current.name, fit, change, verdict)
-    return fit if better else current
-
-
-Step = tuple[list[str], Fit, Fit, tuple[ResidualDependence, ...], tuple[ResidualDependence, ...]]
-"""One accepted addition: the effects added, the model before and after, and the residual
-structure of each."""
 
 
 class Search:
@@ -535,54 +468,8 @@ class Search:
                     )
 
     def causes(self) -> list[Cause]:
-        """The accepted causes, their parameters as the final model estimates them, with
-        profile-likelihood intervals: the linearised errors are too small where
-        parameters trade off along a curved valley (:mod:`optimize.fitting.likelihood`)."""
-        current = self.current
-        own = [p for step in self.steps for e in step[0] for p in EFFECT_FREE[e]]
-        profiles: dict[str, Interval] = {}
-        profile_failure = ""
-        if own:
-            self.say("profile-likelihood intervals of " + ", ".join(own))
-            try:
-                profiles = profile_intervals(
-                    self.design,
-                    self.m,
-                    current.calibration,
-                    own,
-                    ordered=current.ordered,
-                    sigma=self.sigma,
-                )
-            except Exception as exc:  # the intervals are then null (JSON), the evidence says why
-                profiles = {p: Interval(math.nan, math.nan, 0) for p in own}
-                profile_failure = f"the profile likelihood failed ({_reason(exc)})"
-        field_fixed = "external_remanence" not in current.calibration.names
-        if field_fixed:  # then the data fix these only relative to the field's strength
-            estimate = current.calibration.estimate
-            for p in set(own) & set(FIELD_RELATIVE):
-                profiles[p] = widened(p, estimate[p], profiles[p], FIELD_TOLERANCE)
-        causes = []
-        for added, before, after, s0, s1 in self.steps:
-            for name in added:
-                cause = _cause(
-                    self.design,
-                    name,
-                    before,
-                    after,
-                    s0,
-                    s1,
-                    current,
-                    profiles,
-                    field_fixed,
-                    profile_failure,
-                )
-                if len(added) > 1:
-                    others = ", ".join(a for a in added if a != name)
-                    evidence = cause.evidence[:-1] + f" (accepted together with {others}: "
-                    evidence += "no single addition paid)."
-                    cause = replace(cause, evidence=evidence)
-                causes.append(cause)
-        return causes
+        """The accepted causes (:func:`accepted_causes` of the final model)."""
+        return accepted_causes(self.design, self.m, self.current, self.steps, self.sigma, self.say)
 
     def power(self) -> dict[str, dict[str, object]]:
         """The power of the data for each remaining candidate (:func:`power_of_data`)."""

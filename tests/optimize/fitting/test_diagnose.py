@@ -329,7 +329,7 @@ def test_a_profile_likelihood_that_fails_is_said_in_the_causes_evidence(monkeypa
     def profile(*args, **options):
         raise FloatingPointError("planted\nfailure")
 
-    monkeypatch.setattr(dg.search, "profile_intervals", profile)
+    monkeypatch.setattr(dg.causes, "profile_intervals", profile)
     m = synthesize_data(DEMO, ("gravity",), n=24, noise_mm=0.2, seed=4).measurements
     result = dg.diagnose(DEMO, m, candidates=("gravity",))
     assert [c.name for c in result.causes] == ["gravity"]
