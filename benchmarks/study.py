@@ -203,7 +203,7 @@ def pareto_only(points: int | None) -> list[str]:
     with tempfile.TemporaryDirectory() as tmp:
         for label, continuation in (("baseline", False), ("continued", True)):
             t0, c0 = time.perf_counter(), cpu_seconds()
-            res = run_sweeps(study, Path(tmp) / label, continuation=continuation, start=best.values)
+            res = run_sweeps(study, Path(tmp) / label, continuation=continuation, start=best)
             took = (time.perf_counter() - t0, cpu_seconds() - c0)
             runs[label] = ({"pareto sweeps": took}, took)
             fronts[label] = res.sweeps

@@ -250,7 +250,7 @@ def run_study(
                 scheduler=scheduler,
                 workers=workers,
                 progress=w.count,
-                start=best.values,
+                start=best,
             ),
             w,
         )

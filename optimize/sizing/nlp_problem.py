@@ -327,6 +327,7 @@ def _column(model: RingPairModel) -> ca.Function:
     )
 
 
+@lru_cache(maxsize=1)
 def _design_rows() -> tuple[tuple[str, ...], ca.Function]:
     """The rows that depend on the design alone, and prm -> (those rows, magnet volume,
     external distance, catheter OD). [SI]
@@ -359,6 +360,14 @@ def _design_rows() -> tuple[tuple[str, ...], ca.Function]:
         [ca.vertcat(*[r for _, r in rows]), volume, distance, s["catheter_outer_diameter"]],
     )
     return tuple(g for g, _ in rows), fn
+
+
+def design_values(prm: np.ndarray) -> dict[str, float]:
+    """The rows that depend on the design alone (the rings' fit, the diameters, the seat,
+    the Pareto quantities: :func:`_design_rows`) at the parameter vector ``prm``, by
+    group. [SI]"""
+    groups, fn = _design_rows()
+    return dict(zip(groups, np.asarray(fn(prm)[0]).ravel().tolist(), strict=True))
 
 
 @lru_cache(maxsize=8)

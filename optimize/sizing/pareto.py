@@ -32,7 +32,7 @@ import numpy as np
 
 from design import stored
 from design.processes import die_with_parent
-from optimize.sizing.nlp import OptimizationResult, optimize_design, pareto_values
+from optimize.sizing.nlp import OptimizationResult, kept_optimum, optimize_design, pareto_values
 from optimize.sizing.studyfile import Study
 
 Progress = Callable[[int, int], None]
@@ -100,14 +100,19 @@ def _solve_point(
     start: Mapping[str, float] | None = None,
     previous: tuple[OptimizationResult | None, str] | None = None,
 ) -> tuple[OptimizationResult | None, str]:
-    """One point: (result, '') or (None, why it raised). With ``previous`` (the
-    neighbour's answer, looser bound) or ``start`` (free quantities, SI), the NLP starts
-    from the neighbour's design if it was feasible, else from ``start``; if that finds no
-    feasible design the point is solved again from the study's own starts (which alone
+    """One point: (result, '') or (None, why it raised). ``previous`` is the neighbour's
+    answer (the next looser bound; for a sweep's loosest point, the study's optimum):
+    where its design meets this bound too it is this point's answer, no NLP solved
+    (:func:`optimize.sizing.nlp.kept_optimum`). Else the NLP starts from the neighbour's
+    design if it was feasible, else from ``start`` (free quantities, SI); if that finds
+    no feasible design the point is solved again from the study's own starts (which alone
     look for the conflicting constraints), so a warm start never loses a point the cold
     path finds."""
     try:
         if previous is not None and previous[0] is not None and previous[0].feasible:
+            kept = kept_optimum(study, against, epsilon, previous[0])
+            if kept is not None:
+                return kept, ""
             start = previous[0].values
         if start is not None:
             warm = optimize_design(
@@ -153,7 +158,7 @@ def run_sweeps(
     scheduler: str | None = None,
     workers: int = 2,
     progress: Progress | None = None,
-    start: Mapping[str, float] | None = None,
+    start: OptimizationResult | Mapping[str, float] | None = None,
     continuation: bool = True,
 ) -> ParetoResult:
     """Solve every Pareto sweep of ``study`` (``study.pareto``), resuming from ``out_dir``.
@@ -161,19 +166,24 @@ def run_sweeps(
     scheduler : address of a running Dask scheduler (e.g. ``tcp://host:8786``); None starts
         a local cluster of ``workers`` processes for the duration of the call.
     progress : called with (points done, points in all).
-    start : free quantities (SI, by name) of the study's optimum
-        (:attr:`OptimizationResult.values`): each sweep's loosest point starts there
-        (None: from the study's own starts).
-    continuation : each further point starts from its neighbour's design, the one with
-        the next looser bound (:func:`_solve_point`; a point the warm start finds
-        infeasible is solved again cold). False: every point from the study's own starts,
-        independent (the cold path; ``start`` unused).
+    start : the study's optimum (its result; or its free quantities, SI, by name,
+        :attr:`OptimizationResult.values`): each sweep's loosest point starts there, and
+        is the optimum itself where that meets its bound (None: from the study's own
+        starts).
+    continuation : each further point is its neighbour's answer (the one with the next
+        looser bound) where that meets its bound, else starts from the neighbour's design
+        (:func:`_solve_point`; a point the warm start finds infeasible is solved again
+        cold). False: every point from the study's own starts, independent (the cold
+        path; ``start`` unused).
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
     t0 = time.perf_counter()
     store = Path(out_dir) / POINTS
     how: tuple[object, ...] = ()
+    optimum = start if isinstance(start, OptimizationResult) and continuation else None
+    if isinstance(start, OptimizationResult):
+        start = start.values if start.feasible else None
     if continuation:
         how = ("continuation", sorted((k, round(float(v), 15)) for k, v in (start or {}).items()))
     else:
@@ -216,8 +226,8 @@ def run_sweeps(
                 futures = {}
                 previous: Any = None  # the neighbour's answer, or its future
                 for i, (a, e, p) in enumerate(plan):
-                    if i and a != plan[i - 1][0]:
-                        previous = None  # a new sweep
+                    if not i or a != plan[i - 1][0]:  # a new sweep: from the optimum
+                        previous = (optimum, "") if optimum is not None else None
                     if p in done:
                         previous = (done[p].result, done[p].error) if continuation else None
                         continue

@@ -112,7 +112,7 @@ def optimize(
                 )
         pareto = None
         if study.pareto and not no_pareto:
-            pareto = _run_sweeps(study, out, scheduler, workers, best.values)
+            pareto = _run_sweeps(study, out, scheduler, workers, best)
             written += write_pareto_csvs(pareto, study, out)
             plot_fronts(pareto, best, study, out / "pareto.png")
             written.append(out / "pareto.png")
@@ -129,10 +129,10 @@ def optimize(
 
 
 def _run_sweeps(
-    study: Study, out: Path, scheduler: str | None, workers: int, start: dict[str, float]
+    study: Study, out: Path, scheduler: str | None, workers: int, start: OptimizationResult
 ) -> ParetoResult:
     """The study's Pareto sweeps on Dask, with a progress bar, each sweep continued from
-    the optimum's free quantities ``start`` (SI)."""
+    the optimum ``start`` (:func:`optimize.sizing.pareto.run_sweeps`)."""
     from optimize.sizing.pareto import run_sweeps
 
     with progress("Pareto points") as update:

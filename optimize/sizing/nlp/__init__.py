@@ -15,7 +15,7 @@ minimum-violation problem), :mod:`~optimize.sizing.nlp.bounds` (Pareto bounds); 
 package re-exports their names.
 """
 
-from optimize.sizing.nlp.bounds import pareto_values
+from optimize.sizing.nlp.bounds import kept_optimum, pareto_values
 from optimize.sizing.nlp.branches import (
     ARRIVAL_TOLERANCE,
     BRANCH_TOLERANCE,
@@ -63,6 +63,7 @@ __all__ = [
     "_solve_one",
     "controllable_disc_radius",
     "evaluate_design",
+    "kept_optimum",
     "optimize_design",
     "pareto_values",
     "start_breaks",

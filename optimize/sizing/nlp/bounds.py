@@ -1,10 +1,17 @@
-"""The epsilon bounds of the Pareto sweeps. SI units."""
+"""The epsilon bounds of the Pareto sweeps, and the answers a tighter bound keeps. SI units."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
 from design.magnets import ring_volume
+from optimize.sizing.materials import material
+from optimize.sizing.nlp.evaluation import _nlp_shape, _state, _violation
+from optimize.sizing.nlp_designs import group_bounds, study_parameters
+from optimize.sizing.nlp_problem import core, design_values
+from optimize.sizing.nlp_results import OptimizationResult
 from optimize.sizing.studyfile import ParetoSweep, Study
 
 
@@ -46,3 +53,34 @@ def pareto_values(study: Study, sweep: ParetoSweep) -> np.ndarray:
     if not high > low:
         raise ValueError(f"pareto sweep against {sweep.against} has an empty range")
     return np.linspace(low, high, sweep.points)
+
+
+def kept_optimum(
+    study: Study, against: str, epsilon: float, looser: OptimizationResult
+) -> OptimizationResult | None:
+    """``looser`` (a feasible answer under a looser bound on ``against``, or none) as the
+    answer under the bound ``epsilon``, where its design meets that bound too: the
+    feasible set only shrinks as the bound tightens, so a design optimal in the larger set
+    and inside the smaller one is optimal there (the epsilon-constraint method); no NLP
+    is solved. None where it breaks the bound (beyond FEASIBILITY_TOLERANCE, the NLP's
+    own acceptance). The bound's state replaces the looser one's in ``constraints`` and
+    ``active``; ``starts`` are the solves that found the design. [SI]"""
+    if not looser.feasible or looser.design is None:
+        return None
+    cat, wire = (material(n) if n else None for n in looser.materials)
+    bounds = group_bounds(study, cat, wire, {against: epsilon})
+    name = f"epsilon.{against}"
+    value = design_values(study_parameters(study, looser.design))[name]
+    state = _state(name, np.array([value]), bounds)
+    if _violation([state]) > 0:
+        return None
+    state = replace(state, active=state.active and name in core(_nlp_shape(study)).variable_groups)
+    constraints = tuple(s for s in looser.constraints if s.name != name) + (state,)
+    active = tuple(a for a in looser.active if a != name) + ((name,) if state.active else ())
+    return replace(
+        looser,
+        constraints=constraints,
+        active=active,
+        epsilon={**looser.epsilon, against: epsilon},
+        seconds=0.0,
+    )

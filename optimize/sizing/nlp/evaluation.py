@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -53,6 +53,22 @@ def _nlp_shape(study: Study) -> NlpShape:
     )
 
 
+def _state(
+    name: str, vals: np.ndarray, bounds: Mapping[str, tuple[float, float]], mult: float = 0.0
+) -> ConstraintState:
+    """The state of constraint group ``name`` from its rows' values ``vals`` (SI) and the
+    largest |multiplier| of its rows (scaled problem): its worst row against its limits."""
+    lo, hi = bounds[name]
+    scale, unit, _ = GROUPS[name]
+    margins = np.minimum(vals - lo, hi - vals)
+    i = int(np.argmin(margins))
+    limit = lo if vals[i] - lo <= hi - vals[i] else hi
+    active = margins[i] / scale < ACTIVE_TOLERANCE or mult > 1e-7
+    return ConstraintState(
+        name, float(vals[i]), float(limit), float(margins[i]), bool(active), mult, unit, scale
+    )
+
+
 def _states(
     c: Core,
     g: np.ndarray,
@@ -65,19 +81,9 @@ def _states(
         lo, hi = bounds[name]
         if not (math.isfinite(lo) or math.isfinite(hi)):
             continue
-        vals = g[rows == name]
-        scale, unit, _ = GROUPS[name]
-        margins = np.minimum(vals - lo, hi - vals)
-        i = int(np.argmin(margins))
-        limit = lo if vals[i] - lo <= hi - vals[i] else hi
         mult = 0.0 if multipliers is None else float(np.max(np.abs(multipliers[rows == name])))
-        near = margins[i] / scale < ACTIVE_TOLERANCE or mult > 1e-7
-        active = bool(near and name in c.variable_groups)
-        out.append(
-            ConstraintState(
-                name, float(vals[i]), float(limit), float(margins[i]), active, mult, unit, scale
-            )
-        )
+        state = _state(name, g[rows == name], bounds, mult)
+        out.append(replace(state, active=state.active and name in c.variable_groups))
     return tuple(out)
 
 

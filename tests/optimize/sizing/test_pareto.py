@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from studies import SMALL
 
-from optimize.sizing.nlp import optimize_design
+from optimize.sizing.nlp import evaluate_design, kept_optimum, optimize_design
 from optimize.sizing.pareto import _solve_point, is_monotone, point_key, run_sweeps
 from optimize.sizing.studyfile import loads_study
 
@@ -53,3 +53,36 @@ def test_changed_inputs_are_not_taken_for_solved_ones():
 def test_a_point_that_raises_is_recorded_not_fatal():
     result, error = _solve_point(None, "external_distance", 0.1)  # type: ignore[arg-type]
     assert result is None and error.startswith("AttributeError")
+
+
+def test_a_bound_the_looser_answer_meets_keeps_it_as_the_epsilon_constraint_method_says():
+    """Along a sweep the feasible set only shrinks, so an optimum that meets the tighter
+    bound is the optimum there (the epsilon-constraint method; Haimes, Lasdon & Wismer
+    1971): :func:`kept_optimum` returns it without a solve, and IPOPT solving that point
+    from the study's own start reaches the same disc radius; a bound it breaks is
+    solved. The bound's state is checked against the forward evaluation's."""
+    study = loads_study(SWEEP)
+    best = optimize_design(study)
+    distance = best.values["external_distance"]
+    for below in (5e-3, 0.0):
+        kept = kept_optimum(study, "external_distance", distance - below, best)
+        assert kept is not None and kept.design == best.design
+        assert kept.objective == best.objective and kept.epsilon == {
+            "external_distance": distance - below
+        }
+        state = next(s for s in kept.constraints if s.name == "epsilon.external_distance")
+        forward = evaluate_design(
+            study, best.design, best.materials, {"external_distance": distance - below}
+        )
+        twin = next(s for s in forward.constraints if s.name == state.name)
+        assert abs(state.value - twin.value) < 1e-12 and abs(state.margin - twin.margin) < 1e-12
+        assert abs(state.margin - below) < 1e-9
+        assert state.active == (below == 0.0) == (state.name in kept.active)
+    direct = optimize_design(study, epsilon={"external_distance": distance - 5e-3})
+    assert direct.feasible and abs(direct.objective - best.objective) <= 1e-6
+    assert kept_optimum(study, "external_distance", distance + 5e-3, best) is None
+    result, error = _solve_point(
+        study, "external_distance", distance + 5e-3, best.values, (best, "")
+    )
+    assert not error and result is not None and result.seconds > 0
+    assert result.objective < best.objective  # a farther magnet, a smaller disc
