@@ -79,6 +79,7 @@ from design.magnets import ring_volume
 from design.model import RingPairModel, Symbols, magnet_clearance
 from design.registry import NAMES, index
 from design.stops import stop_stiffness, stop_torque
+from optimize.sizing.nlp_iterates import BestIterate
 from optimize.sizing.studyfile import DEG, MM, MM3
 
 SMOOTH_MAX_SHARPNESS = 200.0
@@ -516,6 +517,7 @@ class Problem:
     n_variables: int
     n_constraints: int
     row_scale: np.ndarray  # scale of every inequality row (file unit, SI per unit)
+    best: BestIterate  # the solver's best feasible iterate (reset before each solve)
 
 
 def _ipopt_options(max_iterations: int, tolerance: float, hessian: str) -> dict[str, Any]:
@@ -600,8 +602,10 @@ def problem(
     c = core(shape)
     nlp, row_scale, _ = _symbolic_nlp(c, relaxed=False, exact=hessian == "exact")
     options = _ipopt_options(max_iterations, tolerance, hessian)
+    best = BestIterate(nlp["x"].numel(), nlp["g"].numel(), options["ipopt.constr_viol_tol"])
+    options["iteration_callback"] = best
     solver = ca.nlpsol("design_nlp", "ipopt", nlp, options)
-    return Problem(c, solver, nlp["x"].numel(), nlp["g"].numel(), row_scale)
+    return Problem(c, solver, nlp["x"].numel(), nlp["g"].numel(), row_scale, best)
 
 
 @lru_cache(maxsize=8)

@@ -171,10 +171,20 @@ def _solve_one(
     lo, hi = params[len(NAMES) + n : len(NAMES) + n + nf], params[len(NAMES) + n + nf :][:nf]
     p = params[: len(NAMES)]
     for attempt in range(2):
+        prob.best.reset(lbg, ubg)
         sol = prob.solver(x0=w0, p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         raise_if_interrupted()  # IPOPT's interface stops the solve on Ctrl-C, and goes on
         stats = prob.solver.stats()
         w = np.asarray(sol["x"]).ravel()
+        lam_g, lam_x = np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel()
+        status = str(stats.get("return_status", "unknown"))
+        success = bool(stats.get("success", False))
+        if not success and prob.best.best is not None:
+            # IPOPT stalled at, or wandered off, a feasible optimum it could not certify:
+            # its best feasible iterate, judged below like any answer (nlp_iterates)
+            w, lam_g, lam_x, _ = prob.best.best
+            why = "stalled" if prob.best.stalled else status
+            status, success = f"Best_Feasible_Iterate ({why})", True
         v = lo + (hi - lo) * np.clip(w[:nf], 0.0, 1.0)
         x = w[nf : nf + n * k_all].reshape(n, k_all, order="F") * xs[:, None]
         prm = np.asarray(c.params(v, p)).ravel()
@@ -195,7 +205,6 @@ def _solve_one(
     violation = _violation(states)
     res = np.asarray(c.column.map(k_all)(x, c.commands, c.configuration_params(prm))[0])
     equilibrium = float(np.abs(res / xs[:, None]).max()) if res.size else 0.0
-    success = bool(stats.get("success", False))
     message = ""
     if not np.all(np.isfinite(w)):
         message = "non-finite solution"
@@ -212,11 +221,10 @@ def _solve_one(
     elif study.limits.stable:
         message = _loop_faults(c, prm, reached)
     accepted = success and not message
-    lam_g = np.asarray(sol["lam_g"]).ravel()
     result = StartResult(
         index=index_,
         materials=names,
-        status=str(stats.get("return_status", "unknown")),
+        status=status,
         success=success,
         accepted=accepted,
         objective=_objective(study, metrics, norms) if np.all(np.isfinite(w)) else math.nan,
@@ -231,7 +239,7 @@ def _solve_one(
         x,
         p,
         lam_g[n_eq + n_epi : n_eq + n_epi + len(c.rows)],
-        np.asarray(sol["lam_x"]).ravel()[:nf],
+        lam_x[:nf],
         violation,
         g,
         metrics,
