@@ -210,8 +210,10 @@ def _limits(doc: dict[str, Any]) -> str:
     rows, gains = [], []
     for r in doc["limits"]:
         moved = f"{r['old']:.3g} → {r['new']:.3g} {r['unit']}" if np.isfinite(r["old"]) else "—"
-        gain = f"{r['gain']:+.2f} mm" if np.isfinite(r["gain"]) else "not estimated"
-        rows.append([r["meaning"], number_text(r["multiplier"]) or "— (bound)", moved, gain])
+        unknown = r.get("reason", "no design found")
+        gain = f"{r['gain']:+.2f} mm" if np.isfinite(r["gain"]) else unknown
+        unknown_multiplier = "— (bound)" if r["limit"].startswith("bound.") else "—"
+        rows.append([r["meaning"], number_text(r["multiplier"]) or unknown_multiplier, moved, gain])
         gains.append(False)
     if not rows:
         return "<p><b>What limits it.</b> Nothing is active: the optimum is interior.</p>"

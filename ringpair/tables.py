@@ -26,6 +26,7 @@ from design.records import Design
 from design.registry import PARAMETERS, file_unit
 from design.stiffness import TipStiffness
 from design.units import MM, MM3
+from optimize.sizing.limit_costs import limit_meaning
 
 if TYPE_CHECKING:
     from optimize.sizing.nlp import OptimizationResult
@@ -379,14 +380,22 @@ def material_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]
 
 def limit_rows(best: OptimizationResult, moved: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The sensitivity stage's rows ``moved`` (:func:`ringpair.pipeline.sensitivity`), then
-    the active items of ``best`` it could not move, without a gain (NaN)."""
+    the active items of ``best`` it could not move (a bound at the end of what its quantity
+    admits, as a gap at 0 mm, or a limit the study does not set), without a gain (NaN) and
+    with the ``reason``."""
     rows = list(moved)
     covered = {g for r in rows for g in r["groups"]}
     for item in best.active:
         if item not in covered and not item.startswith("epsilon."):
             rows.append(
                 {
-                    "meaning": item,
+                    "meaning": limit_meaning(item),
+                    "reason": "not moved: "
+                    + (
+                        "at the end of what the quantity admits"
+                        if item.startswith("bound.")
+                        else "the study sets no limit for it"
+                    ),
                     "limit": item,
                     "groups": [item],
                     "unit": "",

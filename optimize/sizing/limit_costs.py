@@ -88,6 +88,19 @@ def limit_costs(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: -np.nan_to_num(r["gain"], nan=-np.inf))
 
 
+def limit_meaning(item: str) -> str:
+    """What an active item of a result (a constraint group, ``bound.<name>.low/high``)
+    limits, in words: "the lower bound of the ring length", "the limit on the ..."."""
+    from optimize.sizing.nlp_problem import GROUPS
+
+    if item.startswith("bound."):
+        _, name, side = item.split(".")
+        key = next((k for k in FREE_KEYS.values() if k.name == name), None)
+        what = key.meaning if key is not None else name
+        return f"the {'lower' if side == 'low' else 'upper'} bound of the {what}"
+    return f"the limit on the {GROUPS[item][2]}" if item in GROUPS else item
+
+
 def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str, Any]] | None:
     """``study`` with ``limit`` moved by RELAX towards a larger design space, and what moved
     (meaning, unit, old and new value in file units); None where it cannot move."""
@@ -112,9 +125,8 @@ def _moved(study: Study, limit: str, groups: list[str]) -> tuple[Study, dict[str
             return None
         free = tuple(new if f.name == name else f for f in study.free)
         unit = file_key(name).rsplit("_", 1)[-1] if name in PARAMETERS else "mm"
-        meaning = f"the {'lower' if side == 'low' else 'upper'} bound of the {key.meaning}"
         what = {
-            "meaning": meaning,
+            "meaning": limit_meaning(limit),
             "unit": unit,
             "old": old_v / key.scale,
             "new": new_v / key.scale,

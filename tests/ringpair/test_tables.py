@@ -72,3 +72,21 @@ def test_check_values_read_without_raw_exponents():
     for value in 10.0 ** rng.uniform(-15, 3, 200) * rng.choice([-1, 1], 200):
         for unit in ("mm", "deg", "relative", "fraction", "", "mm^3"):
             assert "e" not in tables.check_value_text(float(value), unit), (value, unit)
+
+
+def test_limits_the_stage_could_not_move_are_named_in_words_with_why():
+    """An active bound at the end of what its quantity admits (the rings' gap at 0 mm, the
+    default study's optimum) and an active constraint the study sets no limit for are
+    listed after the moved rows in words, with the reason, not as their keys."""
+    moved = [{"meaning": "the limit on x", "groups": ["neutral"], "gain": 0.2}]
+    best = SimpleNamespace(active=["neutral", "bound.magnet_gap.low", "ring_seat"])
+    rows = tables.limit_rows(best, moved)
+    assert rows[0] is moved[0] and len(rows) == 3
+    gap, seat = rows[1], rows[2]
+    assert gap["meaning"] == "the lower bound of the face-to-face gap of the rings"
+    assert gap["reason"] == "not moved: at the end of what the quantity admits"
+    assert seat["meaning"] == (
+        "the limit on the ring bore minus the printed pieces' wire bore and passage"
+    )
+    assert seat["reason"] == "not moved: the study sets no limit for it"
+    assert np.isnan(gap["gain"]) and np.isnan(seat["old"])

@@ -181,8 +181,11 @@ def _solve_one(
         success = bool(stats.get("success", False))
         if not success and prob.best.best is not None:
             # IPOPT stalled at, or wandered off, a feasible optimum it could not certify:
-            # its best feasible iterate, judged below like any answer (nlp_iterates)
-            w, lam_g, lam_x, _ = prob.best.best
+            # its best feasible iterate, judged below like any answer (nlp_iterates). An
+            # interior-point iterate's multipliers are the barrier's, nonzero on every row,
+            # not KKT multipliers: unknown (NaN), so its active rows are read from margins.
+            w = prob.best.best[0]
+            lam_g, lam_x = np.full_like(lam_g, np.nan), np.full_like(lam_x, np.nan)
             why = "stalled" if prob.best.stalled else status
             status, success = f"Best_Feasible_Iterate ({why})", True
         v = lo + (hi - lo) * np.clip(w[:nf], 0.0, 1.0)

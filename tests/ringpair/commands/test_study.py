@@ -427,6 +427,11 @@ def test_report_per_material_and_limits_come_from_the_solver(study_run):
     # a relaxed limit never makes the re-solved optimum worse (IPOPT from the optimum)
     assert all(g > -1e-6 * doc["best"]["disc_radius_mm"] for g in gains)
     page = (out / "report.html").read_text()
+    # each row says in words what it limits; one the stage could not move says why
+    for r in doc["limits"]:
+        assert r["meaning"].startswith("the ") and r["limit"] not in r["meaning"], r
+        if r["old"] is None:
+            assert r["reason"].startswith("not moved: ") and r["reason"] in page, r
     if gains and gains[0] > 0:
         top = doc["limits"][0]
         assert f"would add <b>{top['gain']:.2f} mm</b>" in page and top["meaning"] in page
