@@ -194,7 +194,12 @@ def _covered_disc(
     outside = np.isin(pieces, open_pieces[open_pieces > 0])
     py, pz = np.meshgrid(centres, centres, indexing="ij")
     gap = np.hypot(py, pz)[outside]
-    disc = float(max(gap.min() - pixel / np.sqrt(2), 0.0)) if gap.size else float(extent)
+    # rest lies on a pixel corner: an uncovered pixel there (at pixel / sqrt(2), which
+    # rounding made 4e-20 m more than that) means no disc at all
+    if not gap.size:
+        disc = float(extent)
+    else:
+        disc = 0.0 if gap.min() < pixel else float(gap.min() - pixel / np.sqrt(2))
     return disc, float(pixel), float(extent)
 
 

@@ -110,3 +110,31 @@ def test_demonstrator_baseline_is_all_controllable_and_its_disc_is_the_workspace
     pixel = 2 * 1.05 * (ws.max_deflection + ws.droop) / 400
     assert ws.disc_radius - chord - 2 * pixel <= ctl.covered_disc_radius <= ws.disc_radius
     assert ctl.disc_radius == ws.disc_radius
+
+
+def test_a_home_outside_every_covered_cell_has_a_disc_of_exactly_zero():
+    """Cells that cover a C-shaped band 5..10 mm about home (a 36 x 4 grid of tip
+    positions, the last twenty degrees open) and not home itself, which is open to the
+    outside: the disc is 0, not the rounding of the home pixel's distance (4e-20 m read as
+    a disc in the study's torsion check); a filled disc of 10 mm reads 10 mm to the
+    polygon's chord and the raster's pixel."""
+    from design.controllable import _covered_disc
+
+    angle = np.linspace(0, 2 * np.pi, 36, endpoint=False)
+    rest = np.array([0.15, 0.0, 0.0])
+
+    def grid(radii):
+        y = radii[None, :] * np.cos(angle)[:, None]
+        z = radii[None, :] * np.sin(angle)[:, None]
+        return np.stack([np.full_like(y, 0.15), y, z], axis=2)
+
+    ring = grid(np.linspace(5e-3, 10e-3, 4))
+    ok = np.ones(ring.shape[:2], bool)
+    ok[-1] = False  # no cell joins the last angle to the first: the band is open there
+    disc, pixel, _ = _covered_disc(ring, ok, rest)
+    assert disc == 0.0
+    filled = grid(np.linspace(0.0, 10e-3, 5))
+    ok = np.ones(filled.shape[:2], bool)
+    disc, pixel, _ = _covered_disc(filled, ok, rest)
+    chord = 10e-3 * (1 - np.cos(np.pi / 36))  # the polygon's inset from the circle
+    assert 10e-3 - chord - 2 * pixel <= disc <= 10e-3
