@@ -5,9 +5,11 @@ above, external-magnet distance from below, :data:`optimize.sizing.studyfile.PAR
 maximises the study's objective with :func:`optimize.sizing.nlp.optimize_design`. Points run as Dask
 tasks: on a local cluster (processes, one thread each) by default, or on an existing
 cluster given its scheduler address. By default each sweep is a continuation in its
-bound: its loosest point starts from the study's optimum (when given), each further
-point from its neighbour's design (:func:`run_sweeps`), so the sweeps are three chains
-of tasks the workers share; ``continuation=False`` solves every point from the study's
+bound: its loosest points start from the study's optimum (when given), each further
+point from the design of the point :data:`CHAINS` places looser (:func:`run_sweeps`), so
+each sweep is :data:`CHAINS` interleaved chains of tasks the workers share (one chain a
+sweep left the magnet-volume sweep, 6 points of up to 150 s, the critical path: 481 of
+the default study's 490 s); ``continuation=False`` solves every point from the study's
 own starts (the cold path, the baseline of ``benchmarks/study.py``). Each finished point
 is stored under ``out_dir/points/`` (:mod:`design.stored`: JSON and NPZ, never code) keyed
 by a hash of the study, the point and the code, so a rerun of the same inputs skips what
@@ -38,6 +40,9 @@ from optimize.sizing.studyfile import Study
 Progress = Callable[[int, int], None]
 """progress(done, total), called as points finish (resumed ones count at once)."""
 POINTS = "points"
+CHAINS = 2
+"""Interleaved continuation chains per sweep: point i starts from point i - CHAINS's
+answer (the next looser bound of its chain), the first CHAINS from the optimum."""
 
 
 @dataclass(frozen=True)
@@ -100,8 +105,9 @@ def _solve_point(
     start: Mapping[str, float] | None = None,
     previous: tuple[OptimizationResult | None, str] | None = None,
 ) -> tuple[OptimizationResult | None, str]:
-    """One point: (result, '') or (None, why it raised). ``previous`` is the neighbour's
-    answer (the next looser bound; for a sweep's loosest point, the study's optimum):
+    """One point: (result, '') or (None, why it raised). ``previous`` is the answer at its
+    chain's next looser bound (:func:`predecessor`; for a sweep's loosest points, the
+    study's optimum):
     where its design meets this bound too it is this point's answer, no NLP solved
     (:func:`optimize.sizing.nlp.kept_optimum`). Else the NLP starts from the neighbour's
     design if it was feasible, else from ``start`` (free quantities, SI); if that finds
@@ -167,11 +173,11 @@ def run_sweeps(
         a local cluster of ``workers`` processes for the duration of the call.
     progress : called with (points done, points in all).
     start : the study's optimum (its result; or its free quantities, SI, by name,
-        :attr:`OptimizationResult.values`): each sweep's loosest point starts there, and
-        is the optimum itself where that meets its bound (None: from the study's own
-        starts).
-    continuation : each further point is its neighbour's answer (the one with the next
-        looser bound) where that meets its bound, else starts from the neighbour's design
+        :attr:`OptimizationResult.values`): each sweep's :data:`CHAINS` loosest points
+        start there, and are the optimum itself where that meets their bound (None: from
+        the study's own starts).
+    continuation : each further point is the answer of the point CHAINS places looser
+        (:func:`predecessor`) where that meets its bound, else starts from that design
         (:func:`_solve_point`; a point the warm start finds infeasible is solved again
         cold). False: every point from the study's own starts, independent (the cold
         path; ``start`` unused).
@@ -185,7 +191,8 @@ def run_sweeps(
     if isinstance(start, OptimizationResult):
         start = start.values if start.feasible else None
     if continuation:
-        how = ("continuation", sorted((k, round(float(v), 15)) for k, v in (start or {}).items()))
+        start_items = sorted((k, round(float(v), 15)) for k, v in (start or {}).items())
+        how = ("continuation", CHAINS, start_items)
     else:
         start = None
     keys = {
@@ -224,16 +231,19 @@ def run_sweeps(
                 if cluster is not None:  # our workers die with this process (kill -9)
                     client.run(die_with_parent, os.getpid())
                 futures = {}
-                previous: Any = None  # the neighbour's answer, or its future
+                answers: dict[Path, Any] = {}  # each point's answer, or its future
                 for i, (a, e, p) in enumerate(plan):
-                    if not i or a != plan[i - 1][0]:  # a new sweep: from the optimum
+                    j = predecessor(plan, i) if continuation else None
+                    if j is not None:
+                        previous = answers[plan[j][2]]
+                    else:
                         previous = (optimum, "") if optimum is not None else None
                     if p in done:
-                        previous = (done[p].result, done[p].error) if continuation else None
+                        answers[p] = (done[p].result, done[p].error)
                         continue
                     future = client.submit(_solve_point, study, a, e, start, previous, pure=False)
                     futures[future] = (a, e, p)
-                    previous = future if continuation else None
+                    answers[p] = future
                 for future in as_completed(futures):
                     a, e, path = futures[future]
                     result, error = future.result()
@@ -250,6 +260,14 @@ def run_sweeps(
         for s in study.pareto
     }
     return ParetoResult(sweeps, len(todo), resumed, time.perf_counter() - t0, used)
+
+
+def predecessor(plan: list[tuple[str, float, Any]], i: int) -> int | None:
+    """Index in ``plan`` (sweeps one after the other, each loosest bound first) of the
+    point whose answer point ``i`` continues from: :data:`CHAINS` places looser in its
+    sweep; None for a sweep's first CHAINS points (they start from the optimum)."""
+    j = i - CHAINS
+    return j if j >= 0 and plan[j][0] == plan[i][0] else None
 
 
 def is_monotone(points: tuple[ParetoPoint, ...], tolerance: float = 1e-6) -> bool:

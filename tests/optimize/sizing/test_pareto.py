@@ -86,3 +86,16 @@ def test_a_bound_the_looser_answer_meets_keeps_it_as_the_epsilon_constraint_meth
     )
     assert not error and result is not None and result.seconds > 0
     assert result.objective < best.objective  # a farther magnet, a smaller disc
+
+
+def test_each_sweep_is_two_interleaved_chains_from_the_optimum():
+    """Point i of a sweep continues from point i - 2 of the same sweep (its chain's next
+    looser bound); a sweep's first two points start from the optimum, so a 6-point sweep
+    is two chains of 3 the two workers can run side by side."""
+    from optimize.sizing.pareto import CHAINS, predecessor
+
+    plan = [("magnet_volume", e, None) for e in (6, 5, 4, 3, 2, 1)]
+    plan += [("external_distance", e, None) for e in (1, 2, 3)]
+    chains = [predecessor(plan, i) for i in range(len(plan))]
+    assert CHAINS == 2
+    assert chains == [None, None, 0, 1, 2, 3, None, None, 6]
