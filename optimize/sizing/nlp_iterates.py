@@ -37,7 +37,7 @@ class BestIterate(ca.Callback):  # type: ignore[misc]
     iterate of the current solve. nx, ng : the NLP's numbers of variables and rows.
     feasible : largest violation of any row (the NLP's scaled rows) of a kept iterate.
     Call :meth:`reset` with the solve's row bounds before each solve; after it,
-    :attr:`best` is (x, lam_g, lam_x, f) or None and :attr:`stalled` says whether this
+    :attr:`best` is (x, f) or None and :attr:`stalled` says whether this
     callback stopped it."""
 
     def __init__(self, nx: int, ng: int, feasible: float) -> None:
@@ -49,7 +49,7 @@ class BestIterate(ca.Callback):  # type: ignore[misc]
     def reset(self, lbg: np.ndarray, ubg: np.ndarray) -> None:
         """Forget the last solve; ``lbg``, ``ubg``: the next solve's row bounds."""
         self.lbg, self.ubg = np.asarray(lbg, float), np.asarray(ubg, float)
-        self.best: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None
+        self.best: tuple[np.ndarray, float] | None = None
         self.since = self.returns = 0
         self.stalled = False
 
@@ -76,16 +76,16 @@ class BestIterate(ca.Callback):  # type: ignore[misc]
         return ca.Sparsity(0, 0)
 
     def eval(self, arg: Sequence[ca.DM]) -> list[Any]:
-        x, f, g, lam_x, lam_g = (np.asarray(a, float).ravel() for a in arg[:5])
+        x, f, g = (np.asarray(a, float).ravel() for a in arg[:3])
         objective = float(f[0])
         violation = np.max(np.maximum(self.lbg - g, g - self.ubg), initial=0.0)
         if violation <= self.feasible and np.isfinite(objective) and np.isfinite(x).all():
-            if self.best is None or objective < self.best[3] - STALL_GAIN * abs(self.best[3]):
-                self.best = (x.copy(), lam_g.copy(), lam_x.copy(), objective)
+            if self.best is None or objective < self.best[1] - STALL_GAIN * abs(self.best[1]):
+                self.best = (x.copy(), objective)
                 self.since = self.returns = 0
                 return [0]
-            if objective < self.best[3]:
-                self.best = (x.copy(), lam_g.copy(), lam_x.copy(), objective)
+            if objective < self.best[1]:
+                self.best = (x.copy(), objective)
             self.returns += 1
         if self.best is not None:
             self.since += 1

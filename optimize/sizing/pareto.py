@@ -109,7 +109,7 @@ def _solve_point(
     chain's next looser bound (:func:`predecessor`; for a sweep's loosest points, the
     study's optimum):
     where its design meets this bound too it is this point's answer, no NLP solved
-    (:func:`optimize.sizing.nlp.kept_optimum`). Else the NLP starts from the neighbour's
+    (:func:`optimize.sizing.nlp.kept_optimum`). Else the NLP starts from that
     design if it was feasible, else from ``start`` (free quantities, SI); if that finds
     no feasible design the point is solved again from the study's own starts (which alone
     look for the conflicting constraints), so a warm start never loses a point the cold

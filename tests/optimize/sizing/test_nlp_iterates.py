@@ -45,7 +45,7 @@ def test_a_kinked_minimum_is_kept_once_the_solve_wanders_about_it():
     status, stopped, _, best = _solve(f, g, [2.0, 1.0], -1.0, 1.0, stop=True)
     assert status == "User_Requested_Stop" and best.stalled
     assert stopped < plain / 2
-    x, _, _, objective = best.best
+    x, objective = best.best
     assert objective == pytest.approx(0.0, abs=1e-9)
     assert x == pytest.approx([0.3, -0.2], abs=1e-9)
 
