@@ -100,7 +100,8 @@ def solve_in_contact(
     multistable: bool = False,
 ) -> tuple[Equilibria, Contact]:
     """The state of each configuration (commanded ring angles [rad]) with ``obstacles``
-    present, and its contact (module docstring). ``params`` shape (k,). [SI]"""
+    present, and its contact (module docstring). ``params`` shape (k,), or one column per
+    configuration, (k, N) (e.g. a moved magnet, :mod:`design.moving`). [SI]"""
     params = np.asarray(params, float)
     eq = solve_equilibria(model, params, theta1, theta2, multistable=multistable)
     n = len(eq)
@@ -111,7 +112,7 @@ def solve_in_contact(
         force=np.zeros((n, 3)),
         gap=np.full(n, np.inf),
         normal=np.full((n, 3), np.nan),
-        params=np.tile(params[:, None], (1, n)),
+        params=np.tile(params[:, None], (1, n)) if params.ndim == 1 else params.copy(),
     )
     if not obstacles or n == 0:
         return eq, contact
@@ -123,7 +124,13 @@ def solve_in_contact(
         return eq, contact
     which = np.argmin(np.nan_to_num(g[:, pressed], nan=np.inf), axis=0)
     x, p, force, point, ok, why = _press(
-        model, params, eq.command[pressed].T, eq.unknowns[pressed].T, obstacles, which, body
+        model,
+        contact.params[:, pressed],
+        eq.command[pressed].T,
+        eq.unknowns[pressed].T,
+        obstacles,
+        which,
+        body,
     )
     fields = {k: v.copy() for k, v in eq.__dict__.items()}
     converged, stable, outs = _check(model, p, eq.command[pressed].T, x)
@@ -164,13 +171,15 @@ def solve_design_in_contact(
     theta2: ArrayLike,
     *,
     multistable: bool = False,
+    params: np.ndarray | None = None,
 ) -> tuple[Equilibria, TipStiffness, Contact]:
     """The states of ``design`` for commanded angles [rad] with its obstacles
     (``environment.obstacles``; none: the free states), their tip stiffness (held on the
     obstacle where the tip presses on one) and their contact; ``model`` for ``design``'s
-    field (:meth:`RingPairModel.for_design`)."""
+    field (:meth:`RingPairModel.for_design`). ``params``: one column per configuration
+    (k, N) where they differ from the design's (a moved magnet, :mod:`design.moving`)."""
     model = model.for_design(design)
-    params = model.parameters(design)
+    params = model.parameters(design) if params is None else params
     body = tip_body(design, printed=PRINTED_TIP in model.effects)
     obstacles = list(design.environment.obstacles)
     eq, contact = solve_in_contact(
@@ -188,7 +197,8 @@ def _press(
     which: np.ndarray,
     body: TipBody,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Press the states x (n, m) onto obstacles ``which`` (m,): (states, their parameters
+    """Press the states x (n, m), of parameters ``params`` (k, m), onto obstacles ``which``
+    (m,): (states, their parameters
     with the contact's applied wrench (k, m), force on the obstacle (m, 3) [N], contact
     point (m, 3) [m], found, why not)."""
     m = x.shape[1]
@@ -203,7 +213,7 @@ def _press(
         a = np.flatnonzero(alive & ~done)
         if a.size == 0:
             break
-        p = _loaded(params, a.size, force[:, a], moment[:, a])
+        p = _loaded(params[:, a], a.size, force[:, a], moment[:, a])
         _, _, outs = _check(model, p, command[:, a], x[:, a])
         position, tangent = outs[2].T, outs[3][0:3].T
         gap = np.full(a.size, np.nan)
@@ -245,7 +255,7 @@ def _press(
         f = lam[a][:, None] * nu
         force[:, a] = f.T
         moment[:, a] = np.cross(q - position, f).T
-        p = _loaded(params, a.size, force[:, a], moment[:, a])
+        p = _loaded(params[:, a], a.size, force[:, a], moment[:, a])
         states, converged, good = _newton(
             model,
             p,

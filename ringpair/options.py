@@ -45,7 +45,7 @@ from design.designfile import DesignError, default_design, load_design
 from design.model import DEFAULT_EFFECTS, SWITCHES, RingPairModel, parse_effects
 from design.records import Design
 from design.strict_json import strict
-from ringpair.angles import parse_angles
+from ringpair.angles import parse_angles, parse_lengths
 
 if TYPE_CHECKING:
     from optimize.fitting.measurements import Measurements
@@ -501,6 +501,12 @@ def angles(text: str, option: str) -> np.ndarray:
     """The angles typed for ``option`` (a range, a list or one value). [deg]"""
     with bad_input(ValueError):
         return parse_angles(text, option)
+
+
+def lengths(text: str, option: str) -> np.ndarray:
+    """The lengths typed for ``option`` (a range, a list or one value). [mm]"""
+    with bad_input(ValueError):
+        return parse_lengths(text, option)
 
 
 def one_angle(text: str, option: str) -> float:

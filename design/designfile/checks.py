@@ -54,7 +54,7 @@ def _check_obstacles(design: Design) -> None:
             )
 
 
-def _check_clearance(design: Design) -> None:
+def check_clearance(design: Design) -> None:
     """Reject a permanent magnet (the external magnet, a source) that overlaps the straight
     robot (base to distal ring)."""
     tip = design.tip

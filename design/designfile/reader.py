@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from design.admissible import WIRE_CLEARANCE, admits
-from design.designfile.checks import _check_clearance, _check_obstacles, _check_rod
+from design.designfile.checks import _check_obstacles, _check_rod, check_clearance
 from design.designfile.environment import _obstacles
 from design.designfile.fields import _external_magnet, _sources
 from design.designfile.inputs import read_input
@@ -111,7 +111,7 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
 
     design = Design(name, robot, tip, ext, environment, description, sources)
     _check_rod(design)
-    _check_clearance(design)
+    check_clearance(design)
     _check_obstacles(design)
     return design
 

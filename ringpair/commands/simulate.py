@@ -10,11 +10,14 @@ import numpy as np
 from rich.table import Table
 
 from design.contact import Contact, solve_design_in_contact
+from design.designfile import DesignError
 from design.equilibrium import Equilibria, solve_design
 from design.geometry import rest_position
 from design.model import RingPairModel
+from design.moving import MovedSource, design_centre, moved, moved_source, pose_parameters
 from design.records import Design
 from design.stiffness import TipStiffness, tip_stiffness
+from design.units import MM
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -22,11 +25,13 @@ from ringpair.options import (
     UserError,
     angle_option,
     angles,
+    bad_input,
     check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
+    lengths,
     model_from,
     output_path,
     path_option,
@@ -73,6 +78,29 @@ memory bound: rows go to the CSV chunk by chunk)."""
     help="Skip the search for other stable states at each command (faster).",
 )
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
+@click.option(
+    "--magnet-x",
+    default=None,
+    help="Move the magnet (the classical steering, beside the rings'): its centre's x "
+    "[mm, base frame] as START:STOP:STEP, a comma list or one value; every combination with "
+    "the ring angles and the other --magnet-* values is simulated. Default: the design's.",
+)
+@click.option("--magnet-y", default=None, help="The moved magnet's centre y [mm], same forms.")
+@click.option("--magnet-z", default=None, help="The moved magnet's centre z [mm], same forms.")
+@click.option(
+    "--magnet-turn",
+    default=None,
+    help="The moved magnet's magnetisation (a coil: its axis) turned about the base z axis "
+    "from the design's [deg], same forms. Default: 0.",
+)
+@click.option(
+    "--magnet",
+    "magnet_source",
+    default=None,
+    help="Which source the --magnet-* options move: 'external' (the [external_magnet]) or N "
+    "(field.sources N, from 1). Default: the external magnet, else the first source with a "
+    "position.",
+)
 @MAX_CONFIGS
 def simulate(
     design: Path | None,
@@ -83,6 +111,11 @@ def simulate(
     ordered: bool,
     no_multistable: bool,
     quiet: bool,
+    magnet_x: str | None,
+    magnet_y: str | None,
+    magnet_z: str | None,
+    magnet_turn: str | None,
+    magnet_source: str | None,
     max_configs: int,
 ) -> None:
     """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
@@ -96,7 +129,9 @@ def simulate(
     failure (why a row has no state; its pose cells are then empty and converged = false),
     stiffness_min_mN_per_mm and stiffness_max_mN_per_mm (the tip's smallest and largest
     principal stiffness at the tracked point, magnetic stiffness included; an inextensible
-    rod's axis, along which the model's tip does not give, is left out).
+    rod's axis, along which the model's tip does not give, is left out). With --magnet-*
+    (a moved magnet) the columns magnet_x_mm, magnet_y_mm, magnet_z_mm and magnet_turn_deg
+    follow theta2_deg, and the ring angles vary fastest.
     """
     d = design_from(design)
     model = model_from(effects).for_design(d)
@@ -107,8 +142,17 @@ def simulate(
         )
     t1 = angles(theta1, "--theta1")
     t2 = angles(theta2, "--theta2")
-    n = t1.size * t2.size
-    check_configurations(n, max_configs, "--theta1 and --theta2", held=ordered)
+    typed = {"x": magnet_x, "y": magnet_y, "z": magnet_z, "turn": magnet_turn}
+    moving = any(v is not None for v in typed.values()) or magnet_source is not None
+    source, poses = _poses(d, typed, magnet_source) if moving else (None, np.zeros((1, 4)))
+    if moving and ordered:
+        raise UserError(
+            "--ordered with --magnet-*: a path that moves the magnet is not followed yet; "
+            "simulate the poses on their own (without --ordered)"
+        )
+    n = t1.size * t2.size * len(poses)
+    what = "--theta1, --theta2 and --magnet-*" if moving else "--theta1 and --theta2"
+    check_configurations(n, max_configs, what, held=ordered)
     out = output_path(
         out or default_out(d.name, "simulate.csv"),
         "--out",
@@ -117,19 +161,31 @@ def simulate(
         inputs=[design],
     )
     g1, g2 = np.meshgrid(np.deg2rad(t1), np.deg2rad(t2), indexing="ij")
-    commanded = np.column_stack([g1.ravel(), g2.ravel()])
+    rings = np.column_stack([g1.ravel(), g2.ravel()])
+    # (theta1, theta2, magnet centre [m], turn [rad]): the ring angles fastest
+    commanded = np.column_stack(
+        [np.tile(rings, (len(poses), 1)), np.repeat(poses, len(rings), axis=0)]
+    )
+    columns = POSE_COLUMNS[:2] + MAGNET_COLUMNS + POSE_COLUMNS[2:] if moving else POSE_COLUMNS
     rest = rest_position(d.robot.free_length)
     step = n if ordered else CHUNK  # a path is solved in one go, from state to state
     head: list[dict] = []
     tail: deque[dict] = deque(maxlen=SHOWN // 2)
     failures: Counter[str] = Counter()  # why rows have no state
     header = f"ringpair simulate, design '{d.name}', model {model.name}"
+    if source is not None:
+        header += f"\nmoved magnet: {source.label} ({source.kind})"
     solving = "solving equilibria (the first run on a machine compiles the model)"
-    with progress(solving, total=n) as update, csv_writer(out, POSE_COLUMNS, header) as put:
+    with progress(solving, total=n) as update, csv_writer(out, columns, header) as put:
         for start in range(0, n, step):
             chunk = commanded[start : start + step]
-            eq, stiffness, contact = _states(d, chunk, model, ordered, not no_multistable)
+            eq, stiffness, contact = _states(d, chunk, model, ordered, not no_multistable, source)
             rows = pose_rows(eq, rest, stiffness, contact)
+            if moving:
+                for row, pose in zip(rows, chunk[:, 2:], strict=True):
+                    row.update(
+                        zip(MAGNET_COLUMNS, [*(pose[:3] / MM), np.rad2deg(pose[3])], strict=True)
+                    )
             put(rows)
             head += rows[: SHOWN - len(head)]
             tail.extend(rows)
@@ -137,30 +193,77 @@ def simulate(
             update(advance=len(rows))
     if not quiet:
         shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
-        _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)")
+        varied = tuple(c for c, v in zip(MAGNET_COLUMNS, poses.T, strict=True) if np.ptp(v) > 0)
+        _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)", varied)
     if failures:
         warn(f"{failures.total()} configuration(s) have no state: " + "; ".join(sorted(failures)))
     console.print(f"wrote {out} ({n} configurations)")
 
 
+MAGNET_COLUMNS = ("magnet_x_mm", "magnet_y_mm", "magnet_z_mm", "magnet_turn_deg")
+"""The moved magnet's pose (--magnet-*): its centre (base frame) and turn about z."""
+MAGNET_HEADS = dict(
+    zip(
+        MAGNET_COLUMNS,
+        ("magnet x [mm]", "magnet y [mm]", "magnet z [mm]", "turn [deg]"),
+        strict=True,
+    )
+)
+
+
+def _poses(
+    d: Design, typed: dict[str, str | None], which: str | None
+) -> tuple[MovedSource, np.ndarray]:
+    """The moved source and its poses (P, 4): every combination of the typed centre
+    coordinates [m] (the design's where not typed) and turns [rad]; each pose checked."""
+    with bad_input(DesignError):
+        source = moved_source(d, which)
+    centre = design_centre(d, source) / MM
+    values = [
+        centre[i : i + 1] if typed[a] is None else lengths(str(typed[a]), f"--magnet-{a}")
+        for i, a in enumerate("xyz")
+    ]
+    turns = np.zeros(1) if typed["turn"] is None else angles(str(typed["turn"]), "--magnet-turn")
+    grids = np.meshgrid(*values, turns, indexing="ij")
+    poses = np.column_stack([g.ravel() for g in grids])
+    poses[:, :3] *= MM
+    poses[:, 3] = np.deg2rad(poses[:, 3])
+    with bad_input(DesignError):  # every pose before any work
+        for pose in poses:
+            moved(d, source, pose[:3], float(pose[3]))
+    return source, poses
+
+
 def _states(
-    d: Design, chunk: np.ndarray, model: RingPairModel, ordered: bool, multistable: bool
+    d: Design,
+    chunk: np.ndarray,
+    model: RingPairModel,
+    ordered: bool,
+    multistable: bool,
+    source: MovedSource | None = None,
 ) -> tuple[Equilibria, TipStiffness, Contact | None]:
-    """The states of the configurations ``chunk`` (M, 2) [rad], their tip stiffness and,
+    """The states of the configurations ``chunk`` (M, 2) [rad] (with a moved ``source``:
+    (M, 6), its centre [m] and turn [rad] after the ring angles), their tip stiffness and,
     with the design's obstacles, their contact (the stiffness then held on the obstacle)."""
     if ordered:
         eq = solve_design(d, chunk[:, 0], chunk[:, 1], model, ordered=True)
         return eq, tip_stiffness(model, model.parameters(d), eq), None
-    return solve_design_in_contact(d, model, chunk[:, 0], chunk[:, 1], multistable=multistable)
+    params = None
+    if source is not None:
+        params = pose_parameters(model.for_design(d), d, source, chunk[:, 2:5], chunk[:, 5])
+    return solve_design_in_contact(
+        d, model, chunk[:, 0], chunk[:, 1], multistable=multistable, params=params
+    )
 
 
-def _print_rows(shown: list[dict], n: int, title: str) -> None:
+def _print_rows(shown: list[dict], n: int, title: str, magnet: tuple[str, ...] = ()) -> None:
     """The poses as a table (the ``shown`` rows, at most SHOWN of ``n``), with each row's
-    state."""
+    state (and the moved magnet's pose columns ``magnet``, those that vary)."""
     table = Table(title=title)
     for col in (
         "theta1 [deg]",
         "theta2 [deg]",
+        *(MAGNET_HEADS[c] for c in magnet),
         "x [mm]",
         "y [mm]",
         "z [mm]",
@@ -174,7 +277,15 @@ def _print_rows(shown: list[dict], n: int, title: str) -> None:
         table.add_row(
             *(
                 f"{row[k]:.2f}"
-                for k in ("theta1_deg", "theta2_deg", "x_mm", "y_mm", "z_mm", "deflection_mm")
+                for k in (
+                    "theta1_deg",
+                    "theta2_deg",
+                    *magnet,
+                    "x_mm",
+                    "y_mm",
+                    "z_mm",
+                    "deflection_mm",
+                )
             ),
             state,
         )

@@ -247,7 +247,7 @@ def test_help_states_the_overwrite_policy(run):
     ("args", "words"),
     [
         (["--theta1", "0:inf:1"], ["--theta1", "finite"]),
-        (["--theta1", "0:360:1e-300"], ["--theta1", "angles; at most 1000000"]),
+        (["--theta1", "0:360:1e-300"], ["--theta1", "values; at most 1000000"]),
         (["--theta1", "1e300"], ["--theta1", "within +-36000 deg"]),
         (
             ["--theta1", "0:360:0.001", "--theta2", "0:360:0.001"],
