@@ -68,7 +68,9 @@ def gear_shaft_front(lay: ActuatorLayout) -> cq.Solid:
     port_d = 1.5 * lay.process.wall_mm
     cuts = [
         cylinder(lay.front_passage, -1.0, nose - socket_depth + 0.01),
-        cylinder(lay.catheter_socket_diameter, nose - socket_depth, nose + 1.0),
+        cylinder(
+            lay.catheter_socket_diameter + lay.hole_compensation, nose - socket_depth, nose + 1.0
+        ),
         radial_port(port_d, u(port_x), s.shaft_journal_mm / 2, 90.0),
     ]
     return single_solid(body.cut(*cuts).clean(), "front gear shaft")
@@ -195,7 +197,7 @@ def wire_mount(lay: ActuatorLayout) -> cq.Solid:
     depth = wire_mount_depth(lay)
     length = depth + CAP_MM
     hex_bore = hexagon_prism(s.hex_mm + lay.fit, -1.0, depth)
-    wire_bore = cylinder(lay.wire_seat_diameter, depth - 1.0, length + 1.0)
+    wire_bore = cylinder(lay.wire_seat_diameter + lay.hole_compensation, depth - 1.0, length + 1.0)
     lead_in = WIRE_LEAD_IN_MM
     countersink = cq.Solid.makeCone(lead_in, 0.0, lead_in, cq.Vector(0, 0, depth - 0.01), Z_AXIS)
     set_screw = cq.Solid.makeCylinder(

@@ -128,6 +128,9 @@ class ActuatorLayout:
     boss_top_z: float
     worm_thread_z: Span
     knob_z: Span
+    hole_compensation: float = 0.0
+    """Added to the drawn diameter of the glued seats (catheter socket, wire seat) where
+    the design asks for hole compensation: the process's hole shrink. [mm]"""
 
     # --- derived sizes -------------------------------------------------------------
     @property
@@ -329,4 +332,5 @@ def actuator_layout(
         boss_top_z=boss_top,
         worm_thread_z=worm_thread,
         knob_z=knob,
+        hole_compensation=(process.hole_shrink_mm if design.tip.mounting.compensate_holes else 0.0),
     )

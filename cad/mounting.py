@@ -116,6 +116,13 @@ class MountingDims:
     distal_pitch: float
     groove_width: float
     groove_depth: float
+    hole_compensation: float = 0.0
+
+    def drawn(self, diameter: float) -> float:
+        """The diameter to draw for a fit bore of printed ``diameter``: wider by the
+        process's hole shrink where the design asks for hole compensation
+        (``hole_compensation``, diametral). [mm]"""
+        return diameter + self.hole_compensation
 
     @property
     def socket_port_z(self) -> float:
@@ -379,6 +386,7 @@ def mounting_dims(
         key_angle_deg=key,
         key_inner_diameter=d["sleeve_bore"],
         chamber_length=d["reservoir_length"],
+        hole_compensation=proc.hole_shrink_mm if tip.mounting.compensate_holes else 0.0,
         **d,
     )
 
@@ -420,13 +428,13 @@ def proximal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
     envelope = cylinder(d.outer_diameter, 0.0, d.proximal_length)
     port_z = d.socket_port_z
     cuts = [
-        cylinder(d.socket_diameter, -1.0, d.socket_depth),
+        cylinder(d.drawn(d.socket_diameter), -1.0, d.socket_depth),
         cylinder(
             d.reservoir_diameter, port_z - d.reservoir_length / 2, port_z + d.reservoir_length / 2
         ),
         radial_port(d.port_diameter, port_z, d.outer_diameter / 2, 180.0),
         cylinder(d.passage_diameter, d.socket_depth - 0.1, d.shoulder_z - d.magnet_length + 0.1),
-        cylinder(d.seat_diameter, d.shoulder_z - d.magnet_length, d.shoulder_z + 0.1),
+        cylinder(d.drawn(d.seat_diameter), d.shoulder_z - d.magnet_length, d.shoulder_z + 0.1),
         cylinder(d.sleeve_bore, d.shoulder_z, d.proximal_length + 1.0),
         annular_sector(
             d.sleeve_bore - 0.2,
@@ -469,8 +477,8 @@ def distal_piece(d: MountingDims, with_groove: bool = True) -> cq.Solid:
         groove = helical_groove(d.outer_diameter, d.groove("distal"), *d.groove_span("distal"))
     cz = d.chamber_z
     cuts = [
-        cylinder(d.seat_diameter, -1.0, d.pocket_depth_distal),
-        cylinder(d.wire_bore, d.pocket_depth_distal - 0.1, d.distal_length + 1.0),
+        cylinder(d.drawn(d.seat_diameter), -1.0, d.pocket_depth_distal),
+        cylinder(d.drawn(d.wire_bore), d.pocket_depth_distal - 0.1, d.distal_length + 1.0),
         cylinder(d.chamber_diameter, cz - d.chamber_length / 2, cz + d.chamber_length / 2),
         radial_port(d.port_diameter, cz, d.outer_diameter / 2, 180.0),
     ]

@@ -64,6 +64,11 @@ class Mounting:
     pretwist : Commanded offset of the wire (theta1) against the catheter, set when the
         robot is assembled: with the stops it presses the rings against one (the paper
         "locks" them so). [rad]
+    compensate_holes : Whether the CAD draws every bore that must fit (the glued seats of
+        rings, catheter and wire, in the tip pieces and the actuator) wider by the
+        process's hole shrink (:attr:`design.process.PrintProcess.hole_shrink`), so that
+        it prints at the size the model takes. Geometry only: the model's robot is the
+        printed one either way.
     """
 
     process: str = DEFAULT_PROCESS
@@ -73,6 +78,7 @@ class Mounting:
     density: float = PROCESSES[DEFAULT_PROCESS].density
     stop_angle: float = math.pi
     pretwist: float = 0.0
+    compensate_holes: bool = False
 
     @classmethod
     def printed_by(cls, process: str, **values: float) -> Mounting:

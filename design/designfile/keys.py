@@ -135,7 +135,7 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
     subsections = {s.split(".")[-1] for s in SECTIONS if s.startswith(name + ".")}
     extra = {
         "external_magnet": {"shape"},
-        "tip.mounting": {"process"},
+        "tip.mounting": {"process", "compensate_holes"},
         "environment": {"obstacles"},
     }.get(name, set())
     for given in node:

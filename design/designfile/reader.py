@@ -126,7 +126,8 @@ def revalidated(design: Design) -> Design:
 def _mounting(doc: dict[str, Any]) -> Mounting:
     """The optional ``[tip.mounting]`` section: ``process`` (a name of
     :data:`design.process.PROCESSES`, default resin) sets the defaults of the wall, fit,
-    clearance and density keys."""
+    clearance and density keys; ``compensate_holes`` (default false) widens the fit bores
+    the CAD draws by the process's hole shrink."""
     node = doc["tip"].get("mounting", {})
     if not isinstance(node, dict):
         raise DesignError(f"[tip.mounting] must be a table of keys; got {node!r}")
@@ -136,10 +137,15 @@ def _mounting(doc: dict[str, Any]) -> Mounting:
             f"tip.mounting.process must be one of {', '.join(map(repr, PROCESSES))}; "
             f"got {process!r}"
         )
+    compensate = node.get("compensate_holes", False)
+    if not isinstance(compensate, bool):
+        raise DesignError(
+            f"tip.mounting.compensate_holes must be true or false; got {compensate!r}"
+        )
     given = _section({"tip": {"mounting": node}}, "tip.mounting")
     # keys the file leaves out take the process's value (the registry's default is resin's)
     values = {field: given[key] for key, field in _MOUNTING.items() if key in node}
-    return Mounting.printed_by(process, **values)
+    return Mounting.printed_by(process, compensate_holes=compensate, **values)
 
 
 _MOUNTING = {

@@ -37,8 +37,10 @@ def design_to_dict(design: Design, explicit: bool = False) -> dict[str, Any]:
         doc["external_magnet"] = {"shape": design.external_magnet.shape}
     mounting = design.tip.mounting
     defaults = Mounting.printed_by(mounting.process)
-    if explicit or mounting.process != DEFAULT_PROCESS:
+    if explicit or mounting.process != DEFAULT_PROCESS or mounting.compensate_holes:
         doc["tip"]["mounting"] = {"process": mounting.process}
+        if explicit or mounting.compensate_holes:
+            doc["tip"]["mounting"]["compensate_holes"] = mounting.compensate_holes
     for p in PARAMETERS.values():
         if p.key is None or p.field is None:
             continue
