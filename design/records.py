@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 from design.fields.fieldmap import FieldMap
 from design.geometry import magnet_spacing
@@ -81,7 +82,7 @@ class Mounting:
     compensate_holes: bool = False
 
     @classmethod
-    def printed_by(cls, process: str, **values: float) -> Mounting:
+    def printed_by(cls, process: str, **values: Any) -> Mounting:
         """The pieces printed by ``process`` (:data:`design.process.PROCESSES`), its wall,
         fit, clearance and density unless ``values`` give them."""
         p = PROCESSES[process]
