@@ -209,3 +209,13 @@ def test_locked_parallel_example_reads_its_stops_and_pretwist():
         pytest.approx(np.pi),
         pytest.approx(np.deg2rad(-40.0)),
     )
+
+
+def test_every_example_design_file_reads():
+    """Each file of examples/ is a valid design (the README's field examples among them)."""
+    from pathlib import Path
+
+    examples = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.toml"))
+    assert len(examples) >= 5
+    for path in examples:
+        assert load_design(path).name == path.stem, path
