@@ -10,7 +10,8 @@
     bom.csv                    bill of materials: what to buy (magnets, tube and wire with
                                cut lengths, screws, adhesive) and what to print (cad.bom)
     cad_summary.json           tracking groove, self-locking and gear numbers, timings
-    renders/...png             each part, assembly, actuator, exploded, tip
+    renders/...png             each part, assembly, actuator, exploded, tip, setup (the robot
+                               and its field sources)
 
 and returns a :class:`CadReport` with the same numbers.
 """
@@ -339,7 +340,7 @@ def build_parts(
         render_meshes = {
             n: (np.asarray(m.vertices), np.asarray(m.faces)) for n, m in read_back.items()
         }
-        report.files += render_all(assembly, out / "renders", render_meshes)
+        report.files += render_all(assembly, out / "renders", render_meshes, design)
     t4 = time.perf_counter()
 
     report.assembly = assembly

@@ -27,7 +27,9 @@ from PIL import Image
 from cad.assembly import Colour, Instance, RobotAssembly
 from cad.meshing import location_matrix, tessellate
 from cad.solids import box
+from cad.sources import bodiless, source_meshes
 from design.atomic import atomic_path
+from design.records import Design
 
 pv.OFF_SCREEN = True
 if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
@@ -188,8 +190,10 @@ def render_scene(
     x_range: tuple[float, float] | None = None,
     section: bool = False,
     zoom: float = 1.0,
+    extra: list[tuple[pv.PolyData, Colour]] | None = None,
 ) -> Path:
-    """Instances (all, or one ``group``) in the base frame.
+    """Instances (all, or one ``group``) in the base frame, with ``extra`` surfaces (the
+    field sources, :mod:`cad.sources`).
 
     exploded : Move every instance by its explode offset.
     transparent : Parts drawn see-through (e.g. the lid).
@@ -215,6 +219,8 @@ def render_scene(
             if mesh.n_points == 0:
                 continue
             _add(pl, mesh, colour, opacity)
+    for mesh, colour in extra or []:
+        _add(pl, mesh, colour)
     _view(pl, eye, zoom)
     return _save(pl, path, title)
 
@@ -245,18 +251,21 @@ def render_all(
     assembly: RobotAssembly,
     out_dir: Path,
     meshes: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    design: Design | None = None,
 ) -> list[Path]:
     """Every picture: each printed part and the ring; the robot; the actuator; the tip,
-    whole and in section; exploded actuator and tip. ``meshes``: (vertices, triangles)
-    per part to reuse (the exported meshes). Returns the files written."""
+    whole and in section; exploded actuator and tip; with ``design``, the set-up (the
+    robot and its field sources to scale). ``meshes``: (vertices, triangles) per part to
+    reuse (the exported meshes). Returns the files written."""
     with vtk_messages():
-        return _render_all(assembly, Path(out_dir), meshes)
+        return _render_all(assembly, Path(out_dir), meshes, design)
 
 
 def _render_all(
     assembly: RobotAssembly,
     out_dir: Path,
     meshes: dict[str, tuple[np.ndarray, np.ndarray]] | None,
+    design: Design | None,
 ) -> list[Path]:
     cache = MeshCache.of(assembly, meshes)
     files: list[Path] = []
@@ -316,6 +325,18 @@ def _render_all(
             zoom=1.3,
         ),
     ]
+    if design is not None:
+        named = ", ".join(["magnets red = north", *bodiless(design)])
+        scenes.append(
+            dict(
+                path=out_dir / "setup.png",
+                title=f"set-up to scale (mm): the straight robot and its field ({named})",
+                eye=(0.3, -1.0, 0.55),
+                transparent=("lid",),
+                extra=source_meshes(design),
+                zoom=1.2,
+            )
+        )
     for scene in scenes:
         files.append(render_scene(cache, assembly, **scene))  # type: ignore[arg-type]
     return files
