@@ -138,7 +138,7 @@ def approximate_truth(case: Planted, name: str, final: Fit) -> float:
         modulus, tube = MODULUS_OF[name]
         truth *= case.truth[modulus] / getattr(case.design.robot, tube).youngs_modulus
     if name in FIELD_RELATIVE and "external_remanence" not in final.calibration.names:
-        truth /= (case.truth["magnet_remanence"] / case.design.tip.remanence) * (
+        truth /= (case.truth["magnet_remanence"] / case.design.tip.magnet_remanence) * (
             case.truth["external_remanence"] / case.design.external_magnet.remanence
         )
     return truth

@@ -108,7 +108,7 @@ def bill_of_materials(
     ring = by_name.get("ring_magnet", {})
     bought(
         "ring_magnet", 2,
-        f"ring magnet, {magnet_grade(tip.remanence)}, magnetised diametrically",
+        f"ring magnet, {magnet_grade(tip.magnet_remanence)}, magnetised diametrically",
         f"OD {_size(mm(tip.magnet_outer_diameter))}, ID {_size(mm(tip.magnet_inner_diameter))}, "
         f"length {_size(mm(tip.magnet_length))}",
         ring.get("mass_g"),

@@ -176,7 +176,7 @@ where its geometry is, relative to the CAD folder."""
 def _bought_materials(design: Design) -> dict[str, tuple[str, float]]:
     """Bought part -> (material, density [kg/m^3]) from the design file."""
     return {
-        "ring_magnet": (f"magnet, remanence {design.tip.remanence:g} T", design.tip.density),
+        "ring_magnet": (f"magnet, remanence {design.tip.magnet_remanence:g} T", design.tip.density),
         "catheter": ("catheter tube", design.robot.catheter.density),
         "wire": ("wire", design.robot.wire.density),
     }

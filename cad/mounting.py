@@ -22,7 +22,7 @@ Distal piece (on the wire, turns the distal ring, theta1)
     the notch | body with the wire bore, a glue reservoir and a radial fill port.
 
 The journal-in-sleeve keeps both rings coaxial; the end face on the shoulder keeps the
-face-to-face gap at ``design.tip.gap``; the key in the notch limits the relative rotation
+face-to-face gap at ``design.tip.magnet_gap``; the key in the notch limits the relative rotation
 theta1 - theta2 to [0, ``design.tip.mounting.stop_angle``] (the rotational stops). Each
 piece carries a single-start helical tracking groove (:mod:`cad.tracking`) whose pitch
 lets its visible length read the groove range; it crosses local +X at the piece's
@@ -284,7 +284,7 @@ def mounting_dims(
         f"at least the {proc.name} meshes' chord tolerance ({proc.linear_deflection_mm:g} mm)",
         mm(tip.magnet_length),
     )
-    require(tip.gap >= 0, "tip ring: gap", "zero or positive", mm(tip.gap))
+    require(tip.magnet_gap >= 0, "tip ring: gap", "zero or positive", mm(tip.magnet_gap))
     q = quantities(design)
     require(
         admits("ring_wall", q),

@@ -387,7 +387,7 @@ def design_tip_geometry(design: Any, **choices: Any) -> TipGeometry:
         tip.magnet_outer_diameter,
         tip.magnet_inner_diameter,
         tip.magnet_length,
-        tip.gap,
+        tip.magnet_gap,
         robot.catheter.outer_diameter,
         robot.wire.outer_diameter,
         robot.catheter.inner_diameter,

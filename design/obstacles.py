@@ -60,7 +60,7 @@ def tip_body(design: Any, printed: bool) -> TipBody:
         offset = float(g.rigid_offset)
         return TipBody(float(g.outer_diameter) / 2, offset, float(g.rigid_length) - offset)
     h = tip.magnet_length
-    return TipBody(tip.magnet_outer_diameter / 2, h / 2, h + tip.gap + h / 2)
+    return TipBody(tip.magnet_outer_diameter / 2, h / 2, h + tip.magnet_gap + h / 2)
 
 
 def _ends(position: np.ndarray, tangent: np.ndarray, body: TipBody) -> np.ndarray:

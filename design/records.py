@@ -7,6 +7,7 @@ and megapascals are converted at the boundary by :mod:`design.designfile`.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -100,8 +101,8 @@ class Tip:
     """The two equal, diametrically magnetised ring magnets at the tip.
 
     magnet_outer_diameter, magnet_inner_diameter, magnet_length : Ring size. [m]
-    remanence : Remanent flux density of the ring material. [T]
-    gap : Face-to-face gap; centre spacing is magnet_length + gap. [m]
+    magnet_remanence : Remanent flux density of the ring material. [T]
+    magnet_gap : Face-to-face gap; centre spacing is magnet_length + magnet_gap. [m]
     density : Magnet mass density. [kg/m^3]
     mass : Extra mass carried at the proximal ring's centre (glue; the mounting pieces'
         own mass comes from ``mounting``). [kg]
@@ -111,8 +112,8 @@ class Tip:
     magnet_outer_diameter: float
     magnet_inner_diameter: float
     magnet_length: float
-    remanence: float
-    gap: float
+    magnet_remanence: float
+    magnet_gap: float
     density: float
     mass: float = 0.0
     mounting: Mounting = field(default_factory=Mounting)
@@ -120,7 +121,23 @@ class Tip:
     @property
     def spacing(self) -> float:
         """Centre-to-centre distance of the two rings along the tip tangent. [m]"""
-        return magnet_spacing(self.magnet_length, self.gap)
+        return magnet_spacing(self.magnet_length, self.magnet_gap)
+
+    @property
+    def gap(self) -> float:
+        """Old name of :attr:`magnet_gap` (the registry's), read with a warning. [m]"""
+        _renamed("Tip.gap", "Tip.magnet_gap")
+        return self.magnet_gap
+
+    @property
+    def remanence(self) -> float:
+        """Old name of :attr:`magnet_remanence` (the registry's), read with a warning. [T]"""
+        _renamed("Tip.remanence", "Tip.magnet_remanence")
+        return self.magnet_remanence
+
+
+def _renamed(old: str, new: str) -> None:
+    warnings.warn(f"{old} is now {new}", DeprecationWarning, stacklevel=3)
 
 
 @dataclass(frozen=True)

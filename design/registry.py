@@ -55,7 +55,7 @@ class Parameter:
     """One scalar model input.
 
     field : where it lives in a :class:`~design.records.Design`, a dotted path of record
-        attributes with a component index for vectors (``"tip.gap"``,
+        attributes with a component index for vectors (``"tip.magnet_gap"``,
         ``"external_magnet.center[0]"``); None for a factor of the model alone (always 1
         in a design, freed by calibration) or an applied load (``default``, 0).
     unit : its SI unit.
@@ -202,7 +202,7 @@ _TABLE: list[Parameter] = [
         "magnet_remanence",
         "T",
         "ring remanence",
-        "tip.remanence",
+        "tip.magnet_remanence",
         "tip.remanence_t",
         0.0,
         1.6,
@@ -210,7 +210,13 @@ _TABLE: list[Parameter] = [
         fit=_REMANENCE_FIT,
     ),
     Parameter(
-        "magnet_gap", "m", "face-to-face gap of the rings", "tip.gap", "tip.gap_mm", 0.0, 100.0
+        "magnet_gap",
+        "m",
+        "face-to-face gap of the rings",
+        "tip.magnet_gap",
+        "tip.gap_mm",
+        0.0,
+        100.0,
     ),
     Parameter(
         "magnet_density",

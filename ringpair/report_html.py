@@ -180,7 +180,7 @@ def _answer(run: Run, doc: dict[str, Any]) -> str:
         f"{_mm(d.robot.catheter.inner_diameter)} mm, wire{' ' + wire if wire else ''} "
         f"Ø{_mm(d.robot.wire.outer_diameter)} mm, rings Ø{_mm(d.tip.magnet_outer_diameter)}/"
         f"{_mm(d.tip.magnet_inner_diameter)} × {_mm(d.tip.magnet_length)} mm with "
-        f"{_mm(d.tip.gap)} mm gap, magnet centre "
+        f"{_mm(d.tip.magnet_gap)} mm gap, magnet centre "
         f"{doc['best']['external_distance_to_centre_mm']:.1f} mm from the rest tip"
     )
     cards.append(

@@ -134,7 +134,7 @@ def as_built(rng: np.random.Generator, design: Design) -> dict[str, float]:
     truth = {
         "catheter_youngs_modulus": design.robot.catheter.youngs_modulus * rng.uniform(0.7, 1.3),
         "wire_youngs_modulus": design.robot.wire.youngs_modulus * rng.uniform(0.7, 1.3),
-        "magnet_remanence": design.tip.remanence * rng.uniform(0.9, 1.1),
+        "magnet_remanence": design.tip.magnet_remanence * rng.uniform(0.9, 1.1),
         "external_remanence": em.remanence * rng.uniform(0.9, 1.1),
     }
     for axis, centre in zip("xyz", em.center, strict=True):

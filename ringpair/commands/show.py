@@ -50,7 +50,7 @@ def show(design: Path | None, save: Path | None, force: bool) -> None:
     table.add_column("quantity")
     table.add_column("value", justify="right")
     m_ring = ring_moment(
-        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.remanence
+        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.magnet_remanence
     )
     rows = [
         ("free length", f"{r.free_length / MM:g} mm"),

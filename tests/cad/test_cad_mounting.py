@@ -172,7 +172,7 @@ def test_rings_coaxial_at_design_gap_and_rotation_limited(demonstrator: Design, 
     # rotation and collides beyond.
     gap_mm = 0.3
     mounting = replace(demonstrator.tip.mounting, stop_angle=math.radians(stop_deg))
-    tip = replace(demonstrator.tip, gap=gap_mm * 1e-3, mounting=mounting)
+    tip = replace(demonstrator.tip, magnet_gap=gap_mm * 1e-3, mounting=mounting)
     design = replace(demonstrator, tip=tip)
     pieces = build_mounting_pieces(design, FDM, with_groove=False)
     d = pieces.dims

@@ -65,7 +65,7 @@ def test_placed_ring_centres_are_the_model_ring_centres(design: Design) -> None:
 
 
 def test_designs_differ_from_the_demonstrator_and_each_other() -> None:
-    tips = {(d.tip.magnet_outer_diameter, d.tip.magnet_length, d.tip.gap) for d in DESIGNS}
+    tips = {(d.tip.magnet_outer_diameter, d.tip.magnet_length, d.tip.magnet_gap) for d in DESIGNS}
     lengths = {d.robot.free_length for d in DESIGNS}
     assert len(tips) == len(DESIGNS) and len(lengths) == len(DESIGNS)
-    assert all(d.tip.gap > 0 and d.tip.magnet_length != 0.5e-3 for d in DESIGNS)
+    assert all(d.tip.magnet_gap > 0 and d.tip.magnet_length != 0.5e-3 for d in DESIGNS)

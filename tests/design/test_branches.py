@@ -42,7 +42,7 @@ def test_touching_rings_snap_apart_at_one_over_sqrt_kappa():
         t.magnet_inner_diameter,
         t.magnet_length,
         t.spacing,
-        t.remanence,
+        t.magnet_remanence,
     )
     kappa = (
         k12

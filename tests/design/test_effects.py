@@ -154,7 +154,7 @@ def test_twist_of_each_transmission_in_a_uniform_transverse_field():
         DEMO.tip.magnet_outer_diameter,
         DEMO.tip.magnet_inner_diameter,
         DEMO.tip.magnet_length,
-        DEMO.tip.remanence,
+        DEMO.tip.magnet_remanence,
     )
     command = np.deg2rad(30.0)
     eq = solve_equilibria(model, params, command, command)
@@ -215,7 +215,11 @@ def test_snap_through_of_coupled_rings_at_the_closed_form_fold(rod):
 
     t = DEMO.tip
     k12 = coupling_coefficient(
-        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.spacing, t.remanence
+        t.magnet_outer_diameter,
+        t.magnet_inner_diameter,
+        t.magnet_length,
+        t.spacing,
+        t.magnet_remanence,
     )
     kappa = (
         k12

@@ -24,7 +24,7 @@ M_RING = ring_moment(
     DEMO.tip.magnet_outer_diameter,
     DEMO.tip.magnet_inner_diameter,
     DEMO.tip.magnet_length,
-    DEMO.tip.remanence,
+    DEMO.tip.magnet_remanence,
 )
 FAR = 1e5  # [m]: a dipole this far away makes a uniform field (gradient 3 B / FAR)
 

@@ -125,8 +125,8 @@ def test_cylinder_distance_is_the_same_on_casadi_symbols():
 def test_ring_centres_are_a_ring_length_plus_gap_apart_along_the_tangent(seed):
     rng = np.random.default_rng(seed)
     tip = random_design(rng).tip
-    spacing = magnet_spacing(tip.magnet_length, tip.gap)
-    assert spacing == tip.magnet_length + tip.gap, f"seed {seed}"
+    spacing = magnet_spacing(tip.magnet_length, tip.magnet_gap)
+    assert spacing == tip.magnet_length + tip.magnet_gap, f"seed {seed}"
     position, tangent = rng.normal(size=3) * 0.1, unit(rng.normal(size=3))
     proximal, distal = ring_centres(position, tangent, spacing)
     np.testing.assert_array_equal(proximal, position, err_msg=f"seed {seed}")
@@ -145,7 +145,7 @@ def test_ring_centres_are_a_ring_length_plus_gap_apart_along_the_tangent(seed):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_ring_centres_of_the_straight_rod_are_at_free_length_and_one_spacing_on(seed):
     design = random_design(np.random.default_rng(seed))
-    length, spacing = design.robot.free_length, design.tip.magnet_length + design.tip.gap
+    length, spacing = design.robot.free_length, design.tip.magnet_length + design.tip.magnet_gap
     proximal, distal = ring_centres(rest_position(length), np.array([1.0, 0, 0]), spacing)
     np.testing.assert_array_equal(proximal, [length, 0, 0], err_msg=f"seed {seed}")
     np.testing.assert_array_equal(distal, [length + spacing, 0, 0], err_msg=f"seed {seed}")
@@ -238,7 +238,7 @@ def test_ring_clearance_is_the_nearest_ring_centre_to_the_magnet_less_the_ring_s
         tangent = unit(np.array([1.0, np.tan(tilt[0]), np.tan(tilt[1])]))
         poses.append((poses[0][0] + rng.uniform(-40, 40, 3) * MM, tangent))
     for position, tangent in poses:
-        centres = ring_centres(position, tangent, tip.magnet_length + tip.gap)
+        centres = ring_centres(position, tangent, tip.magnet_length + tip.magnet_gap)
         nearest = [
             np.linalg.norm(c - nearest_point_on_cylinder(c, centre, axis, radius, half))
             for c in centres

@@ -66,7 +66,7 @@ def test_robot_along_gravity_with_the_field_off_has_home_at_the_straight_tip(see
     design = _with_gravity(random_design(rng), (sign * 9.81, 0.0, 0.0))
     design = dataclasses.replace(
         design,
-        tip=dataclasses.replace(design.tip, remanence=0.0),
+        tip=dataclasses.replace(design.tip, magnet_remanence=0.0),
         external_magnet=dataclasses.replace(design.external_magnet, remanence=0.0),
     )
     model = RingPairModel(EFFECTS[1])
@@ -81,7 +81,7 @@ def test_hanging_robot_with_rings_at_one_place_has_home_at_the_straight_tip(seed
     rng = np.random.default_rng(seed)
     design = _with_gravity(random_design(rng), (9.81, 0.0, 0.0))
     design = dataclasses.replace(
-        design, tip=dataclasses.replace(design.tip, magnet_length=1e-9, gap=0.0)
+        design, tip=dataclasses.replace(design.tip, magnet_length=1e-9, magnet_gap=0.0)
     )
     model = RingPairModel(frozenset({"near_field", "large_deflection", "gravity"}))
     home = solve_home(model, model.parameters(design), design.robot.free_length)

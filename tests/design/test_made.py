@@ -61,7 +61,7 @@ def test_the_issue_52_digits_are_rounded() -> None:
     d = default_design()
     tip = replace(
         d.tip, magnet_outer_diameter=1.34999999998e-3, magnet_inner_diameter=0.6e-3,
-        gap=0.0349200385363e-3,
+        magnet_gap=0.0349200385363e-3,
     )  # fmt: skip
     text = dumps_design(made_design(replace(d, tip=tip)), explicit=True)
     assert "magnet_outer_diameter_mm = 1.35\n" in text

@@ -52,7 +52,7 @@ def _k12(design) -> float:
             t.magnet_inner_diameter,
             t.magnet_length,
             t.spacing,
-            t.remanence,
+            t.magnet_remanence,
         )
     )
 
@@ -109,7 +109,7 @@ def test_rings_held_at_the_upper_stop(stop_deg):
 def test_pretwist_needed_to_hold_a_relative_angle(rho_deg):
     # Rings 1 mm apart (K12 C < 1: one state per command), parallel command: the pre-twist
     # p = rho - C K12 sin(rho) holds them at rho, inside the stops.
-    design = dataclasses.replace(DEMO, tip=dataclasses.replace(DEMO.tip, gap=1e-3))
+    design = dataclasses.replace(DEMO, tip=dataclasses.replace(DEMO.tip, magnet_gap=1e-3))
     c_wire, c_cath = _compliances(design)
     k12 = _k12(design)
     assert (c_wire + c_cath) * k12 < 1

@@ -50,7 +50,7 @@ def test_magnet_offset_in_z_gives_a_workspace_mirror_symmetric_in_y(demonstrator
 
 def test_neutral_deflection_vanishes_without_spacing(demonstrator):
     # Antiparallel rings at the same place cancel exactly (paper Sec. III-A, delta ~ 0).
-    tip = dataclasses.replace(demonstrator.tip, magnet_length=1e-9, gap=0.0)
+    tip = dataclasses.replace(demonstrator.tip, magnet_length=1e-9, magnet_gap=0.0)
     ws = sweep_workspace(dataclasses.replace(demonstrator, tip=tip), np.deg2rad(30))
     assert ws.neutral_deflection < 1e-12
     assert sweep_workspace(demonstrator, np.deg2rad(30)).neutral_deflection > 1e-4

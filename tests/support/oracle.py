@@ -132,16 +132,20 @@ def robot(design: Design, printed: bool = False) -> Robot:
     ei_w, gj_w, mu_w = section(r.wire)
     volume = np.pi * (t.magnet_outer_diameter**2 - t.magnet_inner_diameter**2) / 4
     volume *= t.magnet_length
-    spacing = t.magnet_length + t.gap
+    spacing = t.magnet_length + t.magnet_gap
     k12 = coupling_coefficient(
-        t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, spacing, t.remanence
+        t.magnet_outer_diameter,
+        t.magnet_inner_diameter,
+        t.magnet_length,
+        spacing,
+        t.magnet_remanence,
     )
     g = design.environment.gravity
     offset, pieces, stops = 0.0, (), None
     if printed:
         m = t.mounting
         geometry = tip_geometry(
-            t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.gap,
+            t.magnet_outer_diameter, t.magnet_inner_diameter, t.magnet_length, t.magnet_gap,
             r.catheter.outer_diameter, r.wire.outer_diameter, r.catheter.inner_diameter,
             m.wall, m.fit_allowance, m.running_clearance, m.density, m.stop_angle,
         )  # fmt: skip
@@ -158,7 +162,7 @@ def robot(design: Design, printed: bool = False) -> Robot:
         ei=ei_c + ei_w,
         gj=np.array([gj_w, gj_c]),
         mass_per_length=mu_c + mu_w,
-        moment=t.remanence / MU0 * volume,
+        moment=t.magnet_remanence / MU0 * volume,
         spacing=spacing,
         ring_mass=t.density * volume,
         tip_mass=t.mass,
@@ -311,7 +315,7 @@ def ring_clearance(design: Design, tip: np.ndarray, tangent: np.ndarray) -> floa
     axis = axis / np.linalg.norm(axis)
     reach = np.hypot(t.magnet_outer_diameter / 2, t.magnet_length / 2)
     out = np.inf
-    for centre in (tip, tip + (t.magnet_length + t.gap) * tangent):
+    for centre in (tip, tip + (t.magnet_length + t.magnet_gap) * tangent):
         d = centre - np.asarray(e.center, float)
         along = d @ axis
         across = np.linalg.norm(d - along * axis)

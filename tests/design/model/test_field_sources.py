@@ -51,7 +51,7 @@ def in_field(design: Design, *sources: Source, external: bool = False) -> Design
 def ring_moment(design: Design) -> float:
     t = design.tip
     volume = np.pi / 4 * (t.magnet_outer_diameter**2 - t.magnet_inner_diameter**2)
-    return t.remanence / MU0 * volume * t.magnet_length
+    return t.magnet_remanence / MU0 * volume * t.magnet_length
 
 
 def bending_rigidity(design: Design) -> float:

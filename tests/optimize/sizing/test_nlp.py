@@ -81,7 +81,7 @@ def known_optimum(study: Study):
     m_e = ext.remanence / MU0 * math.pi / 4 * ext.diameter**2 * ext.length
     tip = design.tip
     m = (
-        tip.remanence
+        tip.magnet_remanence
         / MU0
         * math.pi
         / 4
@@ -280,13 +280,13 @@ def test_optimum_rechecked_by_forward_simulation_of_its_design_file(tmp_path):
         tip.magnet_inner_diameter,
         tip.magnet_length,
         tip.spacing,
-        tip.remanence,
+        tip.magnet_remanence,
     )
     ext = design.external_magnet
     m_e = np.asarray(ext.magnetization) * ext.remanence / MU0 * np.pi / 4 * ext.diameter**2
     m_e = m_e * ext.length
     m_ring = (
-        tip.remanence
+        tip.magnet_remanence
         / MU0
         * np.pi
         / 4
