@@ -537,6 +537,9 @@ def _ipopt_options(max_iterations: int, tolerance: float, hessian: str) -> dict[
         # 1e-8, which a stop's contact stiffness turns into 1e-4 rad of ring angle)
         "ipopt.bound_relax_factor": 0.0,
         "error_on_fail": False,
+        # a trial point where the model has no value (NaN) is IPOPT's to step back from;
+        # CasADi's warning for each reached the user's console as raw C++ log lines
+        "show_eval_warnings": False,
     }
 
 
