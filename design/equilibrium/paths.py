@@ -87,6 +87,11 @@ def solve_sequence(
 ) -> Equilibria:
     """Equilibria along an ordered path of commanded angles, as the robot is driven. [rad]
 
+    ``params``: shape (k,), or one column per command (k, N) where the set-up changes
+    along the path (a moved magnet, :mod:`design.moving`): between two commands the
+    parameters then change linearly with the sub-steps, so the changes between listed
+    commands must be small (the caller refines the path).
+
     The first command's state is that of the configuration on its own (the load ramp of
     :func:`solve_equilibria`: the robot enters its loads as on a bench). Each later command
     is reached in sub-steps of at most SUBSTEP, each Newton solve starting from the
@@ -98,15 +103,20 @@ def solve_sequence(
     """
     params = np.asarray(params, float)
     command = _commands(theta1, theta2)
+
+    def column(k: int) -> np.ndarray:
+        return params[:, k] if params.ndim == 2 else params
+
     effective = command
     if "hysteresis" in model.effects:
+        first = column(0)
         width = np.array(
-            [params[index("wire_friction_angle")], params[index("catheter_friction_angle")]]
+            [first[index("wire_friction_angle")], first[index("catheter_friction_angle")]]
         )
         effective = play(command, width)
     corrections = _path_evaluator(model, threading.get_ident())
-    scale = model.unknown_scale(params)
-    corrections.fix(2, params)  # the same along the whole path
+    scale = model.unknown_scale(column(0))
+    corrections.fix(2, column(0))  # the same along the whole path unless it changes
     corrections.fix(3, scale)
     n_rod = model.n_rod
     torsion = model.n_unknowns > n_rod
@@ -133,30 +143,32 @@ def solve_sequence(
     def lags(x: np.ndarray, c: np.ndarray) -> np.ndarray:
         return x[n_rod:] - c if torsion else np.zeros(2)
 
-    def fall(x: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, str]:
-        """The state the robot falls into from x at c, or NaN and why not."""
+    def fall(x: np.ndarray, c: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, str]:
+        """The state the robot falls into from x at c (parameters p), or NaN and why not."""
         fallen, found, contact = _fall(
-            model, params, c[:, None], x[:, None], np.ones(1), _Checks(1), np.arange(1)
+            model, p, c[:, None], x[:, None], np.ones(1), _Checks(1), np.arange(1)
         )
         if found[0]:
             return fallen[:, 0], ""
         return np.full_like(x, np.nan), settings.FAILURES["pulled" if contact[0] else "unstable"]
 
-    def alone(c: np.ndarray) -> tuple[np.ndarray, bool, str]:
-        """The state at c as a configuration on its own: (state or NaN, snapped, failure)."""
-        x, ok, snap, why = _ramp(model, params, c[:, None], _Checks(1))
+    def alone(c: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, bool, str]:
+        """The state at c (parameters p) as a configuration on its own: (state or NaN,
+        snapped, failure)."""
+        x, ok, snap, why = _ramp(model, p, c[:, None], _Checks(1))
         return (x[:, 0] if ok[0] else np.full(model.n_unknowns, np.nan)), bool(snap[0]), why[0]
 
     snapped = np.zeros(command.shape[1], bool)
     failure = np.full(command.shape[1], "", dtype=object)
-    first, snapped[0], failure[0] = alone(effective[:, 0])
+    first, snapped[0], failure[0] = alone(effective[:, 0], column(0))
     states = [first]
     stride = 1
     for k in range(1, command.shape[1]):
         prev = states[-1]
         a, b = effective[:, k - 1], effective[:, k]
+        pa, pb = column(k - 1), column(k)
         if not np.isfinite(prev).all():  # lost: start again as a configuration on its own
-            x, snapped[k], failure[k] = alone(b)
+            x, snapped[k], failure[k] = alone(b, pb)
             states.append(x)
             continue
         n_sub = max(1, int(np.ceil(np.abs(b - a).max() / settings.SUBSTEP)))
@@ -166,6 +178,9 @@ def solve_sequence(
         while j < n_sub:
             step = min(stride, n_sub - j)
             c = path[:, j + step]
+            p = pa + (pb - pa) * ((j + step) / n_sub) if params.ndim == 2 else params
+            if params.ndim == 2:
+                corrections.fix(2, p)
             out, ok = newton(prev, c)
             jump = float(np.abs(lags(out, c) - lag).max()) if ok else np.inf
             if step > 1 and not (ok and jump < settings.SMOOTH_LAG_CHANGE):
@@ -173,7 +188,7 @@ def solve_sequence(
                 continue
             if not ok:
                 snapped[k] = True
-                out, why = fall(out if np.isfinite(out).all() else prev, c)
+                out, why = fall(out if np.isfinite(out).all() else prev, c, p)
                 if why:
                     prev = out
                     failure[k] = why

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from design.contact import Contact, solve_design_in_contact
 from design.designfile import DesignError
-from design.equilibrium import Equilibria, solve_design
+from design.equilibrium import Equilibria, solve_design, solve_sequence
 from design.geometry import rest_position
 from design.model import RingPairModel
 from design.moving import MovedSource, design_centre, moved, moved_source, pose_parameters
@@ -131,7 +131,8 @@ def simulate(
     principal stiffness at the tracked point, magnetic stiffness included; an inextensible
     rod's axis, along which the model's tip does not give, is left out). With --magnet-*
     (a moved magnet) the columns magnet_x_mm, magnet_y_mm, magnet_z_mm and magnet_turn_deg
-    follow theta2_deg, and the ring angles vary fastest.
+    follow theta2_deg, and the ring angles vary fastest; with --ordered too, the magnet is
+    driven from row to row in steps of at most 1 mm and 1 deg.
     """
     d = design_from(design)
     model = model_from(effects).for_design(d)
@@ -145,11 +146,6 @@ def simulate(
     typed = {"x": magnet_x, "y": magnet_y, "z": magnet_z, "turn": magnet_turn}
     moving = any(v is not None for v in typed.values()) or magnet_source is not None
     source, poses = _poses(d, typed, magnet_source) if moving else (None, np.zeros((1, 4)))
-    if moving and ordered:
-        raise UserError(
-            "--ordered with --magnet-*: a path that moves the magnet is not followed yet; "
-            "simulate the poses on their own (without --ordered)"
-        )
     n = t1.size * t2.size * len(poses)
     what = "--theta1, --theta2 and --magnet-*" if moving else "--theta1 and --theta2"
     check_configurations(n, max_configs, what, held=ordered)
@@ -245,6 +241,8 @@ def _states(
     """The states of the configurations ``chunk`` (M, 2) [rad] (with a moved ``source``:
     (M, 6), its centre [m] and turn [rad] after the ring angles), their tip stiffness and,
     with the design's obstacles, their contact (the stiffness then held on the obstacle)."""
+    if ordered and source is not None:
+        return _moved_path(d, chunk, model.for_design(d), source)
     if ordered:
         eq = solve_design(d, chunk[:, 0], chunk[:, 1], model, ordered=True)
         return eq, tip_stiffness(model, model.parameters(d), eq), None
@@ -254,6 +252,35 @@ def _states(
     return solve_design_in_contact(
         d, model, chunk[:, 0], chunk[:, 1], multistable=multistable, params=params
     )
+
+
+POSE_STEP = (1.0 * MM, np.deg2rad(1.0))
+"""Largest change of the moved magnet's centre [m] and turn [rad] between two states of a
+driven path: between listed rows the path is refined to these steps (the solver's
+sub-steps follow the ring angles alone)."""
+
+
+def _moved_path(
+    d: Design, rows: np.ndarray, model: RingPairModel, source: MovedSource
+) -> tuple[Equilibria, TipStiffness, None]:
+    """The states along the listed ``rows`` (M, 6): ring angles [rad], the moved magnet's
+    centre [m] and turn [rad], driven in order. Between two rows the magnet moves in steps
+    of at most POSE_STEP (the rings' angles with it, linearly); a row is ``snapped``
+    where the robot jumped on the way from the row before."""
+    pieces, listed = [rows[:1]], [0]
+    for a, b in zip(rows[:-1], rows[1:], strict=True):
+        moves = np.r_[np.abs(b[2:5] - a[2:5]).max() / POSE_STEP[0], abs(b[5] - a[5]) / POSE_STEP[1]]
+        n = max(1, int(np.ceil(moves.max() - 1e-9)))
+        pieces.append(a + np.outer(np.arange(1, n + 1) / n, b - a))
+        listed.append(listed[-1] + n)
+    path = np.vstack(pieces)
+    params = pose_parameters(model, d, source, path[:, 2:5], path[:, 5])
+    eq = solve_sequence(model, params, path[:, 0], path[:, 1])
+    snapped = np.maximum.reduceat(eq.snapped.astype(int), [0, *(np.array(listed[:-1]) + 1)])
+    fields = {k: v[listed] for k, v in eq.__dict__.items()}
+    fields["snapped"] = snapped.astype(bool)
+    kept = Equilibria(**fields)
+    return kept, tip_stiffness(model, params[:, listed], kept), None
 
 
 def _print_rows(shown: list[dict], n: int, title: str, magnet: tuple[str, ...] = ()) -> None:
