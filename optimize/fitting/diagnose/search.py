@@ -138,6 +138,11 @@ class Search:
         physical parameters)."""
         return self.bounded if self.bounded is not None else self.current
 
+    def held(self) -> Fit | None:
+        """The current model fitted within its priors, where made: the baseline's
+        (``baseline_within``) while the baseline is the current model. [-]"""
+        return self.baseline_within if self.current is self.baseline else None
+
     def explained(self) -> bool:
         """The reference model's residual is consistent with the stated noise."""
         return _noise_consistent(self.reference, self.m)
@@ -519,7 +524,9 @@ def diagnose(
         design, m, candidates, k=k, seed=seed, sigma=sigma, progress=progress, priors=priors
     )
     search.start()
-    while search.remaining and not (search.explained() and not _unphysical(search.current)):
+    while search.remaining and not (
+        search.explained() and not _unphysical(search.current, search.held())
+    ):
         if not search.round():
             break
     search.finish()
@@ -531,7 +538,7 @@ def diagnose(
         causes=tuple(causes),
         structure_before=search.s_base,
         structure_after=search.s_current,
-        unexplained=_unexplained(m, search.current, search.s_current),
+        unexplained=_unexplained(m, search.current, search.s_current, search.held()),
         candidates=search.tried,
         power=power,
         time_s=time.perf_counter() - t0,

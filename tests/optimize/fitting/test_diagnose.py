@@ -354,14 +354,24 @@ def test_a_final_model_that_does_not_predict_held_out_rows_is_reported():
     nothing (benchmark seed [2, 12, 0]: CV RMSE 16.7x the noise, unexplained ''). The
     smallest data sets (16 rows) of nothing planted, drawn from the whole design space;
     seeds 11, 16, 36 and 39 of this draw failed the rule against the plain ratio, or with
-    held-out rows solved by the fold's own load ramp (which fell to another state)."""
+    held-out rows solved by the fold's own load ramp (which fell to another state). The
+    rule is a linear model's, so the draw is one whose driven path does not snap: seed
+    289219020 (a path snapping at 3 of 15 rows) fitted 8.7x the noise, the fit moving the
+    magnet 26 mm to place the snaps (reported as a violated prior)."""
     from dataclasses import replace
 
+    from optimize.fitting.calibrate import PULL_LIMIT
     from optimize.fitting.diagnose import HELD_OUT_RATIO, _fit, _unexplained
+    from optimize.fitting.diagnose.evidence import _outside_priors
     from optimize.fitting.planted import draw_planted
 
     seed = fresh_seed()
-    case = draw_planted(np.random.default_rng(seed), frozenset(), points=(16, 16))
+    rng = np.random.default_rng(seed)
+    case = draw_planted(rng, frozenset(), points=(16, 16))
+    for _ in range(20):  # smooth data: a path without a snap
+        if not case.synthetic.equilibria.snapped.any():
+            break
+        case = draw_planted(rng, frozenset(), points=(16, 16))
     m = case.measurements
     m.sigma[:] = np.nan  # the rule under test, not the chi-square one
     fit = _fit(case.design, m, frozenset(), k=5, seed=0, cv=True, starts=[None], sigma=None)
@@ -372,9 +382,18 @@ def test_a_final_model_that_does_not_predict_held_out_rows_is_reported():
     )
     assert 1.0 <= fit.cv_expected_ratio < 10.0, why
     assert ratio < HELD_OUT_RATIO * fit.cv_expected_ratio, why
-    assert _unexplained(m, fit, ()) == "", why
+    # as the diagnosis does: a baseline outside its priors is also fitted within them
+    # (seed 3427148848: the magnet's centre 10 prior sigmas out at 0.274 mm RMS, held within
+    # them 0.277 mm; reported as a violated prior before)
+    held = None
+    if _outside_priors(fit):
+        held = _fit(
+            case.design, m, frozenset(), k=5, seed=0, cv=True, starts=[None], sigma=None,
+            within=PULL_LIMIT,
+        )  # fmt: skip
+    assert _unexplained(m, fit, (), held) == "", why
     off = 1.1 * HELD_OUT_RATIO * fit.cv_expected_ratio
-    text = _unexplained(m, replace(fit, cv_rmse_mm=off * fit.calibration.rmse_mm), ())
+    text = _unexplained(m, replace(fit, cv_rmse_mm=off * fit.calibration.rmse_mm), (), held)
     assert "does not predict configurations it was not fitted to" in text, text
     assert f"{off:.1f}x the in-sample one" in text, text
     assert f"a right model would give about {fit.cv_expected_ratio:.1f}x" in text, text
