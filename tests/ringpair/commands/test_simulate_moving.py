@@ -96,29 +96,26 @@ def test_a_driven_moving_magnet_path_stays_on_the_states_on_their_own(tmp_path, 
     state is that state, over a drawn set-up (whole design space, default model)."""
     seed = int(np.random.SeedSequence().entropy % 2**32)
     rng = np.random.default_rng(seed)
-    d = random_design(rng)
-    path = tmp_path / "d.toml"
-    save_design(d, path)
-    centre = np.array(d.external_magnet.center) / MM
-    ys = centre[1] + np.linspace(-1.0, 1.0, 5) * rng.uniform(5.0, 25.0)
-    moves = [
-        "--magnet-y",
-        ",".join(f"{y:.6f}" for y in ys),
-        "--theta1",
-        f"{rng.uniform(0, 360):.3f}",
-    ]
-    driven, alone = tmp_path / "driven.csv", tmp_path / "alone.csv"
-    assert (
-        run("simulate", str(path), *moves, "--ordered", "--quiet", "--out", str(driven)).exit_code
-        == 0
-    )
-    assert run("simulate", str(path), *moves, "--quiet", "--out", str(alone)).exit_code == 0
-    a, b = read_csv(driven), read_csv(alone)
-    same = [
-        i for i, (x, y) in enumerate(zip(a, b, strict=True))
-        if x["snapped"] == "false" and y["multistable"] == "false" and y["stable"] == "true"
-    ]  # fmt: skip
-    assert same, f"seed {seed}: no row to compare"
+    for _ in range(10):  # a set-up with a row to compare (seed 2034476848 drew none)
+        d = random_design(rng)
+        path = tmp_path / "d.toml"
+        save_design(d, path)
+        centre = np.array(d.external_magnet.center) / MM
+        ys = centre[1] + np.linspace(-1.0, 1.0, 5) * rng.uniform(5.0, 25.0)
+        moves = ["--magnet-y", ",".join(f"{y:.6f}" for y in ys)]
+        moves += ["--theta1", f"{rng.uniform(0, 360):.3f}"]
+        driven, alone = tmp_path / "driven.csv", tmp_path / "alone.csv"
+        ordered = run("simulate", str(path), *moves, "--ordered", "--quiet", "--out", str(driven))
+        assert ordered.exit_code == 0, f"seed {seed}: {ordered.output}"
+        assert run("simulate", str(path), *moves, "--quiet", "--out", str(alone)).exit_code == 0
+        a, b = read_csv(driven), read_csv(alone)
+        same = [
+            i for i, (x, y) in enumerate(zip(a, b, strict=True))
+            if x["snapped"] == "false" and y["multistable"] == "false" and y["stable"] == "true"
+        ]  # fmt: skip
+        if same:
+            break
+    assert same, f"seed {seed}: no row to compare in 10 set-ups"
     np.testing.assert_allclose(
         _values([a[i] for i in same], POSE[:3]),
         _values([b[i] for i in same], POSE[:3]),
