@@ -554,8 +554,8 @@ def test_a_fit_of_data_with_a_path_follows_it_where_the_path_matters():
     """On-axis torsion set [99, 9] of optimize.fitting.planted (a 244 mm rod, 15 rows with
     their order, 3-D, 0.38 mm noise): the bench drove the path, and where the robot is
     multistable the states depend on it. Solved each on its own, every start ended at 1.7x
-    the noise's RMS distance; fitted along the path from the best, at the noise's
-    (reference: noise x sqrt(3))."""
+    the noise's RMS distance; fitted along the path (from the start, where the path
+    matters already, or from the best), at the noise's (reference: noise x sqrt(3))."""
     seed = [99, 9]
     case = draw_planted(
         np.random.default_rng(seed), frozenset({"torsion"}), points=(16, 30), on_axis=True
@@ -563,7 +563,8 @@ def test_a_fit_of_data_with_a_path_follows_it_where_the_path_matters():
     best, fits = calibrate_from_starts(case.design, case.measurements, ("torsion",))
     rms = {k: round(f.rmse_mm, 3) for k, f in fits.items()}
     why = f"seed {seed}: {case.describe()}; RMS {rms}"
-    assert case.ordered and "along the path" in fits, why
-    assert best is fits["along the path"], why
+    driven = [f for label, f in fits.items() if label.startswith("along the path")]
+    assert case.ordered and driven, why
+    assert any(best is f for f in driven), why
     assert best.rmse_mm <= 1.3 * case.noise_mm * np.sqrt(3), why
     assert fits["nominal"].rmse_mm > 1.5 * best.rmse_mm, why
