@@ -362,9 +362,10 @@ def _disc_potential(points, centre, axis, radius):
 # Slender and flat magnets drawn over the sizes the tool accepts, points 30 radii or more
 # from either face out to 300 magnet sizes: CI's draw seed 3137580581 had a 1.7 x 189 mm
 # needle whose field 162 radii off its axis was 1.3e-8 off (the jump-free face term used
-# where 1 + g is small). Bound 1e-9: the closed form's face terms cancel to about L / r
-# and, each ~ (1 - kc^2) ~ a / r, lose that too (a 7.2 x 0.32 mm disc 1.4 m off: 1.1e-10,
-# magpylib alike).
+# where 1 + g is small). Bound 1e-8: the closed form's face terms cancel to about L / r
+# and, each ~ (1 - kc^2) ~ a / r, lose that too. Flat discs (L / a 0.03-0.2) 80-290 radii
+# off lose most: over seeds 0-39 of this draw up to 3.9e-9 (seed 16; CI seed 4246431265,
+# a 2.8 x 0.055 mm disc 0.43 m off, 1.3e-9), magpylib up to 2.1e-9 on the same points.
 def test_far_field_of_drawn_cylinders_is_that_of_two_charged_end_discs():
     print(f"seed {SEED}")
     rng = np.random.default_rng([SEED, 17])
@@ -389,4 +390,4 @@ def test_far_field_of_drawn_cylinders_is_that_of_two_charged_end_discs():
             expected[:, i] = -remanence * charge.imag / step[:, i]
         flux, _ = evaluate(points, axis, a, length, remanence)
         error = np.linalg.norm(flux - expected, axis=1) / np.linalg.norm(expected, axis=1)
-        assert error.max() < 1e-9, (a, length, axis, points[error.argmax()], error.max())
+        assert error.max() < 1e-8, (a, length, axis, points[error.argmax()], error.max())

@@ -158,7 +158,9 @@ def test_drawn_source_sets_agree_with_an_independent_solve_on_magpylib(effects):
         # kernels ~1 ms a call), the solve nothing; robots and source sets vary more
         command = rng.uniform(-np.pi, np.pi, 2)
         eq = solve(design, effects, command[None, :])
-        if not eq.stable[0]:
+        if not eq.stable[0] or eq.snapped[0]:
+            # a ramp that snaps ends in whichever minimum its jump reaches; the oracle's
+            # flow may settle in another (CI seed 2041505077: two minima 0.65 mm apart)
             continue
         if "large_deflection" in effects:
             tip = chain_state(design, frozenset(effects), command)[2]

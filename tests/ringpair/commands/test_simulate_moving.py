@@ -8,6 +8,7 @@ on failure."""
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -91,10 +92,17 @@ def test_each_moved_pose_is_the_design_with_its_magnet_there(tmp_path, run, read
 
 
 def test_a_driven_moving_magnet_path_stays_on_the_states_on_their_own(tmp_path, run, read_csv):
-    """The magnet moved along a path (--ordered, refined to 1 mm steps): where the state on
-    its own is the only stable one (not multistable) and the path did not snap, the path's
-    state is that state, over a drawn set-up (whole design space, default model)."""
-    seed = int(np.random.SeedSequence().entropy % 2**32)
+    """The magnet moved along a path (--ordered, refined to 1 mm steps), over a drawn
+    set-up (whole design space, default model): where the path did not snap, its state is
+    the state on its own or, where the two differ, another stable state at that pose
+    (checked exactly, :func:`design.equilibrium.stable_states`; the on-its-own run's
+    search for other states need not find it: seed 3876101847, a state 58 mm away). Poses
+    that put the magnet on the robot are refused and redrawn (seed 374038718)."""
+    from design.equilibrium import stable_states
+    from design.model import DEFAULT_EFFECTS, RingPairModel
+    from design.moving import pose_parameters
+
+    seed = int(os.environ.get("RINGPAIR_SEED", np.random.SeedSequence().entropy % 2**32))
     rng = np.random.default_rng(seed)
     for _ in range(10):  # a set-up with a row to compare (seed 2034476848 drew none)
         d = random_design(rng)
@@ -102,26 +110,39 @@ def test_a_driven_moving_magnet_path_stays_on_the_states_on_their_own(tmp_path, 
         save_design(d, path)
         centre = np.array(d.external_magnet.center) / MM
         ys = centre[1] + np.linspace(-1.0, 1.0, 5) * rng.uniform(5.0, 25.0)
-        moves = ["--magnet-y", ",".join(f"{y:.6f}" for y in ys)]
-        moves += ["--theta1", f"{rng.uniform(0, 360):.3f}"]
+        theta1 = rng.uniform(0, 360)
+        moves = ["--magnet-y", ",".join(f"{y:.6f}" for y in ys), "--theta1", f"{theta1:.3f}"]
         driven, alone = tmp_path / "driven.csv", tmp_path / "alone.csv"
         ordered = run("simulate", str(path), *moves, "--ordered", "--quiet", "--out", str(driven))
+        if ordered.exit_code != 0 and "must clear the robot" in ordered.output:
+            continue
         assert ordered.exit_code == 0, f"seed {seed}: {ordered.output}"
         assert run("simulate", str(path), *moves, "--quiet", "--out", str(alone)).exit_code == 0
         a, b = read_csv(driven), read_csv(alone)
-        same = [
+        rows = [
             i for i, (x, y) in enumerate(zip(a, b, strict=True))
-            if x["snapped"] == "false" and y["multistable"] == "false" and y["stable"] == "true"
+            if x["snapped"] == "false" and x["stable"] == "true" and y["stable"] == "true"
         ]  # fmt: skip
-        if same:
+        if rows:
             break
-    assert same, f"seed {seed}: no row to compare in 10 set-ups"
-    np.testing.assert_allclose(
-        _values([a[i] for i in same], POSE[:3]),
-        _values([b[i] for i in same], POSE[:3]),
-        atol=1e-5,
-        err_msg=f"seed {seed}",
-    )
+    assert rows, f"seed {seed}: no row to compare in 10 set-ups"
+    mine, theirs = _values([a[i] for i in rows], POSE[:3]), _values([b[i] for i in rows], POSE[:3])
+    gaps = np.abs(mine - theirs).max(axis=1)
+    differ = [r for r, gap in zip(rows, gaps, strict=True) if gap > 1e-5]
+    if differ:  # the path's own states, through the API, checked at their poses
+        from ringpair.commands.simulate import _moved_path
+
+        model, source = RingPairModel(DEFAULT_EFFECTS).for_design(d), moved_source(d, None)
+        poses = _values(a, ("theta1_deg", "theta2_deg", "magnet_x_mm", "magnet_y_mm",
+                            "magnet_z_mm", "magnet_turn_deg"))  # fmt: skip
+        poses[:, [0, 1, 5]] = np.deg2rad(poses[:, [0, 1, 5]])
+        poses[:, 2:5] *= MM
+        eq, _, _ = _moved_path(d, poses, model, source)
+        np.testing.assert_allclose(eq.position / MM, _values(a, POSE[:3]), atol=1e-5,
+                                   err_msg=f"seed {seed}")  # fmt: skip
+        params = pose_parameters(model, d, source, poses[differ, 2:5], poses[differ, 5])
+        stable = stable_states(model, params, eq.unknowns[differ].T, poses[differ, :2].T)
+        assert stable.all(), f"seed {seed}: rows {differ}"
 
 
 def test_a_path_of_constant_parameter_columns_is_the_plain_path():
