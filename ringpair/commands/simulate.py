@@ -125,7 +125,8 @@ def simulate(
     --ordered, the state reached by driving the listed path. CSV columns: theta1_deg,
     theta2_deg, the tip ring angles, x_mm, y_mm, z_mm (tip, base frame), the tip tangent,
     deflection_mm (from the straight tip), converged, stable, snapped (the robot jumped to
-    another branch on the way), multistable (another stable state exists at that command),
+    another branch on the way), multistable (another stable state found at that command; a
+    search from a few starts, so false does not prove the state unique),
     failure (why a row has no state; its pose cells are then empty and converged = false),
     stiffness_min_mN_per_mm and stiffness_max_mN_per_mm (the tip's smallest and largest
     principal stiffness at the tracked point, magnetic stiffness included; an inextensible
