@@ -204,11 +204,12 @@ def read_field_map(path: str | os.PathLike[str]) -> FieldMap:
     return parse_field_map(text, str(p))
 
 
-def write_field_map(path: str | os.PathLike[str], axes, flux: np.ndarray) -> None:
-    """Write B (nx, ny, nz, 3) [T] on the grid ``axes`` [m] as a field-map file."""
+def write_field_map(path: str | os.PathLike[str], axes, flux: np.ndarray, digits: int = 17) -> None:
+    """Write B (nx, ny, nz, 3) [T] on the grid ``axes`` [m] as a field-map file, each
+    number to ``digits`` significant digits (17: exactly)."""
     from design.atomic import write_text
 
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3) / MM
     rows = np.c_[grid, np.asarray(flux).reshape(-1, 3)]
-    body = "\n".join(",".join(f"{v:.17g}" for v in row) for row in rows)
+    body = "\n".join(",".join(f"{v:.{digits}g}" for v in row) for row in rows)
     write_text(path, ",".join(COLUMNS) + "\n" + body + "\n")
