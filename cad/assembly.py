@@ -48,7 +48,7 @@ COLOURS: dict[str, Colour] = {
 
 DESCRIPTIONS: dict[str, str] = {
     "housing": "base, side walls, bulkheads with U-slot bushing seats, worm bosses",
-    "lid": "lid with tongues holding the shaft bushings and the upper worm bushings",
+    "lid": "lid with tongues holding the shaft bushings and the upper worm bushings, zero marks",
     "gear_shaft_front": "worm wheel + hollow shaft; catheter bonded in its nose (theta2)",
     "gear_shaft_rear": "worm wheel + hollow shaft with hex end for the wire mount (theta1)",
     "worm": "single-start ZI worm with journals, collar and D-flat",

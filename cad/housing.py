@@ -10,6 +10,10 @@ Bushing seats: each bulkhead has a U-slot whose round bottom seats a shaft's spo
 bushing (slot width = bushing + fit allowance); the lid's tongues drop into the slots and
 hold the spools down. Each worm's lower bushing sits in a bored boss on the base, the
 upper one in a seat through the lid. Four M3 screws hold the lid on the end bulkheads.
+Beside each knob the lid has a zero mark, a line engraved along the knob's pointer as the
+parts are placed (the worm's thread towards its wheel): with the pointer on it the ring's
+angle is a multiple of 360 / ratio degrees, the zero set when the transmissions are
+bonded with the rings at theta = 0 (docs/tutorial.md).
 """
 
 from __future__ import annotations
@@ -22,6 +26,9 @@ from cad.layout import ActuatorLayout
 from cad.solids import X_AXIS, box, cylinder, frame, single_solid
 
 SCREW_DEPTH_MM = 8.0
+ZERO_MARK_MM = (1.0, 3.0, 0.8, 0.6)
+"""The lid's zero mark beside each knob: its gap to the knob's rim, length, width and
+depth, an engraved line along the knob's pointer at the drive's zero. [mm]"""
 SADDLE_HALF_ANGLE_DEG = 60.0
 """Half the arc over which a lid tongue's saddle holds its spool: the saddle meets the
 tongue's flat ends at 180 - 60 = 120 deg. [deg]"""
@@ -69,6 +76,7 @@ def housing(lay: ActuatorLayout) -> cq.Solid:
     for xw, yw in zip(lay.wheel_x, lay.worm_y, strict=True):
         z0 = lay.boss_top_z - lay.worm_bushing_length
         cuts.append(cylinder(seat, z0, lay.boss_top_z + 1).translate(cq.Vector(xw, yw, 0)))
+    cuts.extend(zero_marks(lay))
     for xs, ys in _screw_positions(lay):
         cuts.append(
             cylinder(s.lid_screw_tap_mm, top - SCREW_DEPTH_MM, top + 1).translate(
@@ -102,11 +110,34 @@ def lid(lay: ActuatorLayout) -> cq.Solid:
     seat = s.worm_bushing_outer_mm + lay.fit
     for xw, yw in zip(lay.wheel_x, lay.worm_y, strict=True):
         cuts.append(cylinder(seat, z0 - 1, z1 + 1).translate(cq.Vector(xw, yw, 0)))
+    cuts.extend(zero_marks(lay))
     for xs, ys in _screw_positions(lay):
         cuts.append(
             cylinder(s.lid_screw_clearance_mm, z0 - 1, z1 + 1).translate(cq.Vector(xs, ys, 0))
         )
     return single_solid(body.cut(*cuts).clean(), "lid")
+
+
+def zero_mark_centres(lay: ActuatorLayout) -> list[tuple[float, float]]:
+    """(x, y) of each knob's zero mark's centre on the lid's top, actuator frame: beside
+    the knob's rim towards the wheels' axis (y = 0), where its pointer sits at the drive's
+    zero (:func:`cad.drivetrain.placements` places the knob so). [mm]"""
+    gap, length, _, _ = ZERO_MARK_MM
+    out = []
+    for xw, yw in zip(lay.wheel_x, lay.worm_y, strict=True):
+        out.append((xw, yw - math.copysign(lay.spec.knob_mm / 2 + gap + length / 2, yw)))
+    return out
+
+
+def zero_marks(lay: ActuatorLayout) -> list[cq.Solid]:
+    """The engraved zero marks' volumes (cut from the lid's top face), actuator frame."""
+    _, length, width, depth = ZERO_MARK_MM
+    top = lay.lid_z + lay.spec.lid_mm
+    z = (top - depth, top + 1)
+    return [
+        box((x - width / 2, x + width / 2), (y - length / 2, y + length / 2), z)
+        for x, y in zero_mark_centres(lay)
+    ]
 
 
 def lid_placement(lay: ActuatorLayout) -> cq.Location:
