@@ -3,9 +3,11 @@
 CAD works in millimetres: sizes in mm, masses in g. One row per item:
 
 - bought: the two ring magnets (NdFeB grade from the design's remanence, diametrically
-  magnetised, their sizes as the design file rounds them), the external magnet (grade,
-  axial magnetisation and its direction), the catheter tube and the wire with their cut
+  magnetised, their sizes as the design file rounds them), every field source with a body
+  (:func:`field_rows`: each magnet's grade, size, pose and north; a coil's turns, current
+  and pose), the catheter tube and the wire with their cut
   lengths (:mod:`cad.stock`), every screw (:func:`cad.stock.fasteners`) and the adhesive;
+- provided: a uniform field or a field map, nothing to buy (said so);
 - printed: every printed part with its process, material, mass, the face on the bed and
   its supports (:mod:`cad.printing`).
 """
@@ -85,13 +87,84 @@ def _direction(v: Any) -> str:
     return "[" + ", ".join(f"{float(x):.3g}" for x in np.asarray(v, dtype=float)) + "]"
 
 
+def _blank() -> dict[str, Any]:
+    return {k: "" for k in BOM_COLUMNS} | {"quantity": 1, "cut_length_mm": None, "mass_g": None}
+
+
+def _magnet_mass(volume: float) -> float:
+    """Mass of a sintered NdFeB magnet of ``volume`` [m^3], 4 significant digits. [g]"""
+    return float(f"{volume * NDFEB_DENSITY * 1e3:.4g}")
+
+
+def field_rows(design: Design) -> list[dict[str, Any]]:
+    """One row per field source of ``design``: the ``[external_magnet]``, then each of
+    ``[[field.sources]]`` (``source_<n>``, numbered from 1 as in the file). Permanent
+    magnets and coils are ``bought`` (a coil wound or bought to its turns, radius and
+    current); a uniform field and a field map are ``provided`` (the scanner's, the coil
+    system's, whatever the map was measured of): nothing to buy, said so. [mm, g]"""
+    out: list[dict[str, Any]] = []
+
+    def row(item: str, kind: str, spec: str, size: str, mass: float | None, note: str,
+            material: str = "") -> None:  # fmt: skip
+        out.append({"item": item, "kind": kind, "specification": spec, "size_mm": size,
+                    "mass_g": mass, "note": note, "material": material})  # fmt: skip
+
+    ext = design.external_magnet
+    if ext is not None:
+        row(
+            "external_magnet", "bought",
+            f"cylinder magnet, {magnet_grade(ext.remanence)}, magnetised axially",
+            f"diameter {_size(mm(ext.diameter))}, length {_size(mm(ext.length))}",
+            _magnet_mass(np.pi / 4 * ext.diameter**2 * ext.length),
+            f"centre at {_direction(np.asarray(ext.center) * 1e3)} mm, north along "
+            f"{_direction(ext.magnetization)} (base frame)",
+            "sintered NdFeB",
+        )  # fmt: skip
+    for n, s in enumerate(design.sources, start=1):
+        item, centre = f"source_{n}", f"{_direction(np.asarray(s.center) * 1e3)} mm"
+        at = f"centre at {centre}"
+        north = f"{at}, north along {_direction(s.magnetization)} (base frame)"
+        grade = magnet_grade(s.remanence)
+        if s.kind == "cylinder":
+            row(item, "bought", f"cylinder magnet, {grade}, magnetised axially",
+                f"diameter {_size(mm(s.diameter))}, length {_size(mm(s.length))}",
+                _magnet_mass(np.pi / 4 * s.diameter**2 * s.length), north,
+                "sintered NdFeB")  # fmt: skip
+        elif s.kind == "cuboid":
+            a, b, c = s.dimensions
+            row(item, "bought", f"block magnet, {grade}",
+                f"{_size(mm(a), mm(b), mm(c))} (along x, y, z)", _magnet_mass(a * b * c),
+                north, "sintered NdFeB")  # fmt: skip
+        elif s.kind == "sphere":
+            row(item, "bought", f"sphere magnet, {grade}", f"diameter {_size(mm(s.diameter))}",
+                _magnet_mass(np.pi / 6 * s.diameter**3), north, "sintered NdFeB")  # fmt: skip
+        elif s.kind == "coil":
+            row(item, "bought",
+                f"coil, {s.turns:g} turns of {s.current:.3g} A ({s.turns * s.current:.4g} "
+                "ampere-turns), wound or bought to these numbers",
+                f"loop radius {_size(mm(s.radius))}", None,
+                f"{at}, axis {_direction(s.axis)} (right-hand rule, base frame)",
+                "copper")  # fmt: skip
+        elif s.kind == "uniform":
+            strength = float(np.linalg.norm(s.b))
+            row(item, "provided",
+                f"uniform field {strength:.4g} T along {_direction(np.asarray(s.b) / strength)}"
+                if strength > 0 else "uniform field 0 T",
+                "", None, "the scanner's or the coil system's field: nothing to buy")  # fmt: skip
+        else:
+            row(item, "provided", f"field map {Path(s.file).name}", "", None,
+                f"whatever the map was measured or computed of, its origin at {centre}: "
+                "nothing to buy beyond it")  # fmt: skip
+    return out
+
+
 def bill_of_materials(
     design: Design, assembly: RobotAssembly, parts: list[dict[str, Any]]
 ) -> list[dict[str, Any]]:
     """Every item to buy or print for ``design`` (module docstring); ``parts`` are the
     parts table's rows (:func:`cad.build.build_parts`), for the printed parts' process,
     material and mass. [mm, g]"""
-    tip, ext, robot = design.tip, design.external_magnet, design.robot
+    tip, robot = design.tip, design.robot
     lay, d = assembly.actuator.layout, assembly.mounting.dims
     by_name = {p["name"]: p for p in parts}
     rows: list[dict[str, Any]] = []
@@ -115,17 +188,12 @@ def bill_of_materials(
         "mark each ring's north before fitting: it goes to the key's side (angle 0)",
         material="sintered NdFeB",
     )  # fmt: skip
-    axis = _direction(ext.magnetization)
-    volume = np.pi / 4 * ext.diameter**2 * ext.length
-    bought(
-        "external_magnet", 1,
-        f"cylinder magnet, {magnet_grade(ext.remanence)}, magnetised axially",
-        f"diameter {_size(mm(ext.diameter))}, length {_size(mm(ext.length))}",
-        float(f"{volume * NDFEB_DENSITY * 1e3:.4g}"),
-        f"centre at {_direction(np.asarray(ext.center) * 1e3)} mm, north along {axis} "
-        "(base frame)",
-        material="sintered NdFeB",
-    )  # fmt: skip
+    for row in field_rows(design):
+        if row["kind"] == "bought":
+            bought(row["item"], 1, row["specification"], row["size_mm"], row["mass_g"],
+                   row["note"], material=row["material"])  # fmt: skip
+        else:
+            rows.append(_blank() | row)
     materials = {"catheter": robot.catheter, "wire": robot.wire}
     seated = cuts(design, lay, d)
     for name, c in seated.items():

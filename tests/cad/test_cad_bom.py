@@ -10,14 +10,16 @@ from __future__ import annotations
 
 import csv
 import zipfile
+from pathlib import Path
 from xml.etree import ElementTree
 
 import pytest
 
-from cad.bom import BOM_COLUMNS, NDFEB_GRADES, bom_totals, magnet_grade
+from cad.bom import BOM_COLUMNS, NDFEB_GRADES, bom_totals, field_rows, magnet_grade
 from cad.build import CadReport
 from cad.printing import PRINT_SETUP
 from cad.stock import cuts
+from design.designfile import load_design
 from design.records import Design
 
 NS = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
@@ -87,3 +89,33 @@ def test_3mf_objects_carry_their_print_setup(fdm_build) -> None:
 def test_grade_named_for_its_own_remanence(grade) -> None:
     assert f"NdFeB {grade} " in magnet_grade(NDFEB_GRADES[grade])
     assert "no NdFeB grade" in magnet_grade(0.9)
+
+
+# Every field source is in the list: a design with no [external_magnet] (a field map, an
+# MRI bore, coils, blocks) crashed the bill of materials before.
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def test_every_field_source_has_a_row_with_its_own_numbers() -> None:
+    seen = set()
+    for name in ("block_magnets", "helmholtz_pair", "mri_bore", "field_map"):
+        design = load_design(EXAMPLES / f"{name}.toml")
+        rows = {r["item"]: r for r in field_rows(design)}
+        assert ("external_magnet" in rows) == (design.external_magnet is not None), name
+        for n, s in enumerate(design.sources, start=1):
+            r, seen = rows[f"source_{n}"], seen | {s.kind}
+            centre = ", ".join(f"{c * 1e3:.3g}" for c in s.center)
+            if s.kind == "cuboid":
+                a, b, c = (x * 1e3 for x in s.dimensions)
+                assert r["kind"] == "bought" and f"{a:g} x {b:g} x {c:g}" in r["size_mm"]
+                # sintered NdFeB at 7.5 g/cm^3, the block's own volume in cm^3
+                assert r["mass_g"] == pytest.approx(7.5 * a * b * c / 1e3, rel=1e-3)
+                assert magnet_grade(s.remanence) in r["specification"]
+            elif s.kind == "coil":
+                assert r["kind"] == "bought" and f"{s.turns:g} turns" in r["specification"]
+                assert f"{s.current:.3g} A" in r["specification"]
+                assert f"{s.radius * 1e3:g}" in r["size_mm"]
+            else:
+                assert r["kind"] == "provided" and "nothing to buy" in r["note"], name
+            assert s.kind == "uniform" or f"[{centre}]" in r["note"], (name, r["note"])
+    assert seen == {"cuboid", "coil", "uniform", "map"}
