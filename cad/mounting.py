@@ -14,8 +14,9 @@ theta of ``docs/formats.md``.
 
 Proximal piece (on the catheter, turns the proximal ring, theta2)
     catheter socket with a glue reservoir ring and a radial fill port | wire passage
-    (the catheter lumen continued) | ring pocket, ring flush with the shoulder | bearing
-    sleeve that receives the distal piece's journal, with the stop notch cut in its end.
+    (the catheter lumen continued, or the design's narrower ``passage_diameter_mm``) | ring
+    pocket, ring flush with the shoulder | bearing sleeve that receives the distal piece's
+    journal, with the stop notch cut in its end.
 Distal piece (on the wire, turns the distal ring, theta1)
     journal (runs in the sleeve; its end face bears on the shoulder and sets the gap)
     holding the ring pocket, ring recessed by the gap | stop key on the shoulder, riding in
@@ -274,7 +275,7 @@ def mounting_dims(
     design = tip_design(design, process)
     tip, wire, cath = design.tip, design.robot.wire, design.robot.catheter
     Dm, dm = mm(tip.magnet_outer_diameter), mm(tip.magnet_inner_diameter)
-    dw, dc = mm(wire.outer_diameter), mm(cath.inner_diameter)
+    dw = mm(wire.outer_diameter)
     w = mm(tip.mounting.wall)
     # a ring shorter than the meshes' chord tolerance has no seat the CAD can draw and mesh
     # (1e-300 mm left the tessellation without faces)
@@ -332,17 +333,28 @@ def mounting_dims(
     # the ring rests on the pocket floor: its bore over the larger of wire bore and passage
     # (the message names the wire bore where the wire bore alone is too wide)
     seated = admits("ring_seat", quantities(design, g))
-    require(
-        seated or d["wire_bore"] < dm,
-        "distal piece: wire bore diameter (wire + fit allowance)",
-        f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
-        d["wire_bore"],
+    bore = (
+        f"the magnet bore (tip.magnet_inner_diameter_mm = {dm:g}) so the ring rests on the "
+        "pocket floor"
     )
     require(
+        seated or d["wire_bore"] < dm,
+        "distal piece: wire bore diameter (robot.wire.outer_diameter_mm + fit allowance)",
+        f"smaller than {bore}: a wider ring bore or a thinner wire",
+        d["wire_bore"],
+    )
+    passage = (
+        "tip.mounting.passage_diameter_mm"
+        if tip.mounting.passage_diameter
+        else ("robot.catheter.inner_diameter_mm, the catheter's bore continued")
+    )
+    least = mm(design.robot.wire.outer_diameter + WIRE_CLEARANCE)
+    require(
         seated,
-        "proximal piece: wire passage diameter (catheter inner diameter)",
-        f"smaller than the magnet bore ({dm:g} mm) so the ring rests on the pocket floor",
-        dc,
+        f"proximal piece: wire passage diameter ({passage})",
+        f"smaller than {bore}: a wider ring bore, or a narrower passage "
+        f"([tip.mounting] passage_diameter_mm, at least {least:g} for the wire to turn)",
+        d["passage_diameter"],
     )
     outer, skin = d["outer_diameter"], 2 * (w + d["groove_depth"])
     # The derived outer diameter is the needed one to rounding; compare with that slack.

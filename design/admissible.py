@@ -4,7 +4,8 @@ rings' seat on the printed pieces, a flexible rod under the printed tip).
 
 A rule is a *margin*, a function of named quantities (the registry's parameter names,
 :data:`design.registry.NAMES`, and of the printed pieces, :class:`design.mounting.TipGeometry`:
-``wire_bore``, the distal piece's wire bore, and ``rod_length``, the flexible rod under the
+``wire_bore``, the distal piece's wire bore, ``passage_diameter``, the proximal piece's wire
+passage, and ``rod_length``, the flexible rod under the
 rigid tip) that works on numbers and on CasADi symbols alike, and the *least* admissible
 margin. Its consumers:
 
@@ -115,9 +116,7 @@ RULES: dict[str, Rule] = {
         Rule(
             "ring_seat",
             "ring bore minus the printed pieces' wire bore and passage",
-            lambda q: (
-                q["magnet_inner_diameter"] - _max(q["wire_bore"], q["catheter_inner_diameter"])
-            ),
+            lambda q: q["magnet_inner_diameter"] - _max(q["wire_bore"], q["passage_diameter"]),
             limit="wire_clearance",
         ),
     )
@@ -135,6 +134,7 @@ def quantities(design: Design, tip: TipGeometry | None = None) -> dict[str, floa
     q = {n: PARAMETERS[n].value(design) for n in _NAMES}
     if tip is not None:
         q["wire_bore"] = float(tip.wire_bore)
+        q["passage_diameter"] = float(tip.passage_diameter)
         q["rod_length"] = float(tip.rod_length(design.robot.free_length))
     return q
 

@@ -11,8 +11,8 @@ diameters)::
 
     proximal (on the catheter, turns the proximal ring, theta2):
         catheter socket with a glue reservoir and a radial fill port | wire passage (the
-        catheter's lumen, one wall long) | ring pocket, ring flush with the shoulder |
-        bearing sleeve, its end cut by the stop notch
+        catheter's lumen, or the design's narrower passage; one wall long) | ring pocket,
+        ring flush with the shoulder | bearing sleeve, its end cut by the stop notch
     distal (on the wire, turns the distal ring, theta1):
         journal (runs in the sleeve, its end face bears on the shoulder) holding the ring
         pocket, ring recessed by the gap | stop key at the journal's root, riding in the
@@ -223,6 +223,7 @@ def tip_geometry(
     groove_range: Any = GROOVE_RANGE,
     outer_diameter: Any = None,
     socket_depth: Any = None,
+    passage_diameter: Any = None,
 ) -> TipGeometry:
     """The two mounting pieces of a tip (the module's docstring draws them).
 
@@ -237,6 +238,7 @@ def tip_geometry(
         (a larger one is the CAD designer's choice; the model uses the smallest). [m]
     socket_depth : depth of the catheter's glued socket; None: two catheter diameters
         (and at least the glue reservoir and a wall either side). [m]
+    passage_diameter : the proximal piece's wire passage; None: the catheter's bore. [m]
 
     Derived choices, all scaled by the wall w: groove depth w / 2 and width 1.6 w, glue
     ports w across, glue reliefs 0.6 w deep and 2 w long, key 2 w high, axial clearance of
@@ -247,6 +249,7 @@ def tip_geometry(
     (tests/cad/test_cad_mounting.py).
     """
     w, fit, clr = wall, fit_allowance, running_clearance
+    passage = catheter_inner_diameter if passage_diameter is None else passage_diameter
     groove_depth, groove_width = w / 2, 1.6 * w
     port, relief, reservoir_length = w, 0.6 * w, 2 * w
     key_height, axial_clearance = 2 * w, clr
@@ -299,7 +302,7 @@ def tip_geometry(
             _disc(socket, 0, socket_depth),
             _ring(reservoir, socket, port_z - reservoir_length / 2, port_z + reservoir_length / 2),
             _port(port, port_z, reservoir, outer),
-            _disc(catheter_inner_diameter, socket_depth, shoulder - magnet_length),
+            _disc(passage, socket_depth, shoulder - magnet_length),
             _disc(seat, shoulder - magnet_length, shoulder),
             _disc(sleeve_bore, shoulder, proximal_length),
             _ring(outer, sleeve_bore, proximal_length - notch_depth, proximal_length, notch_share),
@@ -347,7 +350,7 @@ def tip_geometry(
         sleeve_bore=sleeve_bore,
         socket_diameter=socket,
         reservoir_diameter=reservoir,
-        passage_diameter=catheter_inner_diameter,
+        passage_diameter=passage,
         wire_bore=wire_bore,
         chamber_diameter=chamber,
         port_diameter=port,
@@ -396,8 +399,14 @@ def design_tip_geometry(design: Any, **choices: Any) -> TipGeometry:
         m.running_clearance,
         m.density,
         m.stop_angle,
-        **choices,
+        **({"passage_diameter": passage_diameter(design)} | choices),
     )
+
+
+def passage_diameter(design: Any) -> float:
+    """The proximal piece's wire passage of ``design``: its ``tip.mounting``'s, or the
+    catheter's bore where that is 0. [m]"""
+    return design.tip.mounting.passage_diameter or design.robot.catheter.inner_diameter
 
 
 def geometry_values(geometry: TipGeometry) -> dict[str, float]:

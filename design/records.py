@@ -71,6 +71,9 @@ class Mounting:
         process's hole shrink (:attr:`design.process.PrintProcess.hole_shrink`), so that
         it prints at the size the model takes. Geometry only: the model's robot is the
         printed one either way.
+    passage_diameter : The proximal piece's wire passage, from the catheter's socket to the
+        ring's pocket; 0 (default) for the catheter's bore continued. A narrower passage
+        lets rings whose bore is below the catheter's seat on the pocket floor. [m]
     """
 
     process: str = DEFAULT_PROCESS
@@ -81,6 +84,7 @@ class Mounting:
     stop_angle: float = math.pi
     pretwist: float = 0.0
     compensate_holes: bool = False
+    passage_diameter: float = 0.0
 
     @classmethod
     def printed_by(cls, process: str, **values: Any) -> Mounting:

@@ -267,6 +267,16 @@ _TABLE: list[Parameter] = [
         )
     ],
     Parameter(
+        "mount_passage_diameter",
+        "m",
+        "mounting pieces' wire passage (0: the catheter's bore)",
+        "tip.mounting.passage_diameter",
+        "tip.mounting.passage_diameter_mm",
+        0.0,
+        50.0,
+        default=0.0,
+    ),
+    Parameter(
         "stop_angle",
         "rad",
         "stops: relative rotation theta1 - theta2 allowed, from 0",

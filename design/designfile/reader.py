@@ -98,6 +98,16 @@ def design_from_dict(doc: dict[str, Any], base: Path | None = None) -> Design:
             f"in the ring; got {tip.magnet_inner_diameter / MM:g}"
         )
 
+    passage = tip.mounting.passage_diameter
+    least = wire.outer_diameter + WIRE_CLEARANCE
+    if passage and not least <= passage <= catheter.inner_diameter:
+        raise DesignError(
+            "tip.mounting.passage_diameter_mm must be at least robot.wire.outer_diameter_mm "
+            f"plus {WIRE_CLEARANCE / MM:g} ({least / MM:g}) so the wire turns in it, and at most "
+            f"robot.catheter.inner_diameter_mm ({catheter.inner_diameter / MM:g}); got "
+            f"{passage / MM:g} (0 or left out: the catheter's bore)"
+        )
+
     sources = _sources(doc, base)
     ext = None
     if "external_magnet" in doc or not sources:

@@ -74,6 +74,11 @@ class Symbols(dict):
             s["magnet_gap"], s["catheter_outer_diameter"], s["wire_outer_diameter"],
             s["catheter_inner_diameter"], s["mount_wall"], s["mount_fit_allowance"],
             s["mount_running_clearance"], s["mount_density"], s["stop_angle"],
+            passage_diameter=ca.if_else(
+                s["mount_passage_diameter"] > 0,
+                s["mount_passage_diameter"],
+                s["catheter_inner_diameter"],
+            ),
         )  # fmt: skip
         """The printed mounting pieces (:func:`design.mounting.tip_geometry`)."""
         self.rod_length = s["free_length"]

@@ -337,7 +337,7 @@ def _design_rows() -> tuple[tuple[str, ...], ca.Function]:
     whatever model the study designs with: the study builds those pieces."""
     prm = ca.SX.sym("params", len(NAMES))
     s = Symbols(prm)
-    q = dict(s) | {"wire_bore": s.tip.wire_bore}
+    q = dict(s) | {"wire_bore": s.tip.wire_bore, "passage_diameter": s.tip.passage_diameter}
     volume = 2 * ring_volume(
         s["magnet_outer_diameter"], s["magnet_inner_diameter"], s["magnet_length"]
     )

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import cadquery as cq
 import numpy as np
@@ -16,10 +17,14 @@ import pytest
 from scipy.integrate import quad
 
 from cad.assembly import tip_locations
+from cad.errors import CadError
 from cad.mounting import MountingDims, MountingSpec, build_mounting_pieces, mounting_dims
 from cad.process import FDM, RESIN
 from cad.tracking import GrooveSpec
+from design.designfile import load_design
 from design.records import Design
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def _disc(diameter: float, length: float) -> float:
@@ -82,6 +87,21 @@ def test_grooveless_piece_volumes_match_closed_form(demonstrator: Design, proces
     d = pieces.dims
     assert pieces.proximal.Volume() == pytest.approx(proximal_volume(d), rel=1e-6)
     assert pieces.distal.Volume() == pytest.approx(distal_volume(d), rel=1e-6)
+
+
+def test_a_narrowed_passage_is_the_pieces_and_seats_rings_below_the_catheters_bore() -> None:
+    # examples/near_magnet.toml: rings of 1.0 mm bore on a catheter of 1.2 mm bore, seated
+    # by a 0.6 mm passage; the catheter's bore continued would leave the rings unseated
+    design = load_design(EXAMPLES / "near_magnet.toml")
+    pieces = build_mounting_pieces(design, RESIN, with_groove=False)
+    d = pieces.dims
+    assert d.passage_diameter == pytest.approx(0.6)
+    assert d.passage_diameter < d.magnet_inner_diameter
+    assert pieces.proximal.Volume() == pytest.approx(proximal_volume(d), rel=1e-6)
+    lumen = replace(design, tip=replace(design.tip, mounting=replace(
+        design.tip.mounting, passage_diameter=0.0)))  # fmt: skip
+    with pytest.raises(CadError, match="wire passage diameter"):
+        mounting_dims(lumen)
 
 
 @pytest.fixture(scope="module")

@@ -52,6 +52,10 @@ def drawn_design(demonstrator: Design, seed: int) -> tuple[Design, dict[str, obj
         "density_kg_m3": float(rng.uniform(900.0, 2000.0)),
         "stop_angle_deg": float(rng.uniform(10.0, np.degrees(MAX_STOP_ANGLE))),
     }
+    if rng.random() < 0.5:  # a narrowed wire passage, from the wire's need to the bore
+        robot = demonstrator.robot
+        wire, bore = robot.wire.outer_diameter, robot.catheter.inner_diameter
+        section["passage_diameter_mm"] = float(rng.uniform(wire * 1e3 + 0.05, bore * 1e3))
     doc = design_to_dict(demonstrator)
     doc["tip"]["mounting"] = section
     return loads_design(tomli_w.dumps(doc), source=f"seed {seed}"), section

@@ -64,6 +64,9 @@ def _drawn(seed: int) -> dict:
     t["magnet_outer_diameter_mm"] = float(rng.uniform(1.0, 5.0))
     t["magnet_inner_diameter_mm"] = wire + float(rng.uniform(-0.05, 0.8))
     t.setdefault("mounting", {})["fit_allowance_mm"] = float(rng.uniform(0.0, 0.3))
+    if rng.random() < 0.5:  # a narrowed passage, sometimes too narrow or wider than the bore
+        passage = wire + float(rng.uniform(0.0, 0.7))
+        t["mounting"]["passage_diameter_mm"] = passage
     return doc
 
 
@@ -84,7 +87,16 @@ def test_the_reader_refuses_exactly_the_designs_a_rule_refuses(seed):
         # the clearance in mm, the rule in m: decided here away from the threshold
         and t["magnet_inner_diameter_mm"] - wire["outer_diameter_mm"] >= clearance_mm
     )
+    passage = t["mounting"].get("passage_diameter_mm", 0.0)
+    if passage:  # the wire turns in it; it narrows the catheter's bore, never widens it
+        admissible = admissible and (
+            wire["outer_diameter_mm"] + clearance_mm <= passage <= cat["inner_diameter_mm"]
+        )
     near = abs(t["magnet_inner_diameter_mm"] - wire["outer_diameter_mm"] - clearance_mm) < 1e-9
+    near |= bool(passage) and (
+        abs(passage - wire["outer_diameter_mm"] - clearance_mm) < 1e-9
+        or abs(passage - cat["inner_diameter_mm"]) < 1e-9
+    )
     if near:
         pytest.skip(f"seed {seed}: the bore is on the clearance to rounding")
     try:
@@ -93,6 +105,7 @@ def test_the_reader_refuses_exactly_the_designs_a_rule_refuses(seed):
     except DesignError as exc:
         refused = str(exc)
     geometric = ("diameter_mm must be smaller", "must be at least robot.wire")
+    geometric += ("passage_diameter_mm must be at least",)
     assert admissible == (not refused), f"seed {seed}: {refused}"
     assert not refused or any(g in refused for g in geometric), f"seed {seed}: {refused}"
 
@@ -107,9 +120,11 @@ def test_the_cad_refuses_and_the_nlp_row_is_negative_where_the_rings_do_not_seat
             continue
         tip = design_tip_geometry(design)
         # the ring rests on the pocket floors: its bore over the distal piece's wire bore
-        # (wire + fit allowance) and over the proximal piece's passage (the catheter's bore)
+        # (wire + fit allowance) and over the proximal piece's passage (the catheter's bore
+        # unless the design narrows it)
         bore = design.robot.wire.outer_diameter + design.tip.mounting.fit_allowance
-        seat = design.tip.magnet_inner_diameter - max(bore, design.robot.catheter.inner_diameter)
+        passage = design.tip.mounting.passage_diameter or design.robot.catheter.inner_diameter
+        seat = design.tip.magnet_inner_diameter - max(bore, passage)
         assert float(tip.wire_bore) == pytest.approx(bore, abs=1e-15), f"seed {seed}"
         q = quantities(design, tip)
         assert RULES["ring_seat"].margin(q) == pytest.approx(seat, abs=1e-15), f"seed {seed}"
