@@ -35,7 +35,7 @@ def test_wire_bore_larger_than_the_magnet_bore_is_rejected(demonstrator: Design)
         build_mounting_pieces(design, FDM)
     msg = str(err.value)
     assert "wire bore diameter" in msg
-    assert "smaller than the magnet bore (2 mm)" in msg
+    assert "smaller than the magnet bore (tip.magnet_inner_diameter_mm = 2)" in msg
     assert "got 2.05 mm" in msg
 
 
