@@ -20,11 +20,13 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from cad.errors import require
 from cad.involute import ToothProfile
+
+if TYPE_CHECKING:  # the drive's numbers are read without the CAD kernel (steering's knob ratio)
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -231,6 +233,8 @@ class WormDrive:
 def helical_prism(profile: ToothProfile, length_mm: float, lead_mm: float) -> cq.Solid:
     """Sweep ``profile`` along +Z over ``length_mm``, turning one revolution per ``lead_mm``
     (right hand), with the profile as drawn (tooth 0 on +X) at the mid-plane. [mm]"""
+    import cadquery as cq
+
     twist_deg = 360.0 * length_mm / lead_mm
     wire = profile.wire().rotate(cq.Vector(), cq.Vector(0, 0, 1), -twist_deg / 2)
     solid = cq.Solid.extrudeLinearWithRotation(
@@ -252,6 +256,8 @@ def worm_thread(drive: WormDrive) -> cq.Solid:
 def wheel_teeth(drive: WormDrive) -> cq.Solid:
     """The wheel's toothed disc, face width b2, axis +Z from z = 0; at mid-face a tooth
     space is centred on +X. [mm]"""
+    import cadquery as cq
+
     profile = drive.wheel_profile
     solid = helical_prism(profile, drive.spec.wheel_face_width_mm, drive.wheel_lead_mm)
     half_pitch = 180.0 / drive.spec.wheel_teeth

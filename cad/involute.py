@@ -14,11 +14,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import cadquery as cq
 import numpy as np
 
 from cad.errors import require
+
+if TYPE_CHECKING:  # profiles as numbers need no CAD kernel; its wires import it when made
+    import cadquery as cq
 
 FLANK_POINTS = 12
 
@@ -133,6 +136,8 @@ class ToothProfile:
 
     def wire(self, n: int = FLANK_POINTS) -> cq.Wire:
         """Closed profile wire in the XY plane: spline flanks, arc tips and roots. [mm]"""
+        import cadquery as cq
+
         radii, half = self.flank(n)
         rf, ra = self.root_radius_mm, self.tip_radius_mm
         radial_foot = rf < radii[0] - 1e-9
@@ -162,4 +167,6 @@ def _polar(radius: float, angle: float) -> tuple[float, float]:
 
 
 def _vec(radius: float, angle: float) -> cq.Vector:
+    import cadquery as cq
+
     return cq.Vector(radius * math.cos(angle), radius * math.sin(angle), 0.0)

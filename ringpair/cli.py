@@ -8,6 +8,7 @@ SIGTERM); 1 an unexpected failure.
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import sys
@@ -30,26 +31,43 @@ if __name__ == "__main__" or Path(sys.argv[0]).name == "ringpair":  # the comman
 import click  # the imports below take seconds: after the early handler
 
 from design.processes import Interrupted, raise_if_interrupted, raise_on_signals
-from ringpair.commands.branch import branch
-from ringpair.commands.cad import cad
-from ringpair.commands.calibrate import calibrate
-from ringpair.commands.diagnose import diagnose
-from ringpair.commands.effects import effects
-from ringpair.commands.force import force
-from ringpair.commands.optimize import optimize
-from ringpair.commands.show import show
-from ringpair.commands.simulate import simulate
-from ringpair.commands.steer import steer_command
-from ringpair.commands.study import study
-from ringpair.commands.synth import synth
-from ringpair.commands.workspace import workspace
 from ringpair.options import UserError, err_console, warn
+
+COMMANDS = {
+    "branch": "branch",
+    "cad": "cad",
+    "calibrate": "calibrate",
+    "diagnose": "diagnose",
+    "effects": "effects",
+    "force": "force",
+    "optimize": "optimize",
+    "show": "show",
+    "simulate": "simulate",
+    "steer": "steer_command",
+    "study": "study",
+    "synth": "synth",
+    "workspace": "workspace",
+}
+"""Each command's name and its click command in :mod:`ringpair.commands` ``.<name>``,
+imported when the command runs (or ``--help`` lists them): the optimisation, fitting, CAD
+and plotting libraries take seconds to load, and ``ringpair simulate`` needs none of
+them."""
 
 
 class _Commands(click.Group):
     """The group, with one last net for a file that cannot be read or written found only
     while a command runs (a full disk, a permission changed meanwhile): one message naming
     the file, exit 2. The commands check their output paths before any work."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in COMMANDS:
+            return None
+        module = importlib.import_module(f"ringpair.commands.{cmd_name}")
+        command: click.Command = getattr(module, COMMANDS[cmd_name])
+        return command
 
     def invoke(self, ctx: click.Context) -> object:
         try:
@@ -72,24 +90,6 @@ def cli() -> None:
     (docs/formats.md) and defaults to the paper's demonstrator. Angles are in degrees,
     lengths in millimetres; base frame: origin at the clamp, x along the straight robot.
     """
-
-
-for _command in (
-    branch,
-    cad,
-    calibrate,
-    diagnose,
-    effects,
-    force,
-    optimize,
-    show,
-    simulate,
-    steer_command,
-    study,
-    synth,
-    workspace,
-):
-    cli.add_command(_command)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001

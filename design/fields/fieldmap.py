@@ -25,7 +25,6 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-from scipy.interpolate import make_interp_spline
 
 from design.units import MM
 
@@ -84,6 +83,8 @@ class FieldMap:
         :func:`map_field`), a call node in SX graphs. Their coefficients interpolate the
         nodes with not-a-knot ends, solved axis by axis (scipy's ``make_interp_spline``:
         the tensor product's system separates), so a 50^3 grid takes about a second."""
+        from scipy.interpolate import make_interp_spline  # 0.5 s to import: maps only
+
         coefficients, knots = np.asarray(self.flux, float), []
         for axis, nodes in enumerate(self.axes):
             spline = make_interp_spline(nodes, coefficients, k=3, axis=axis)
