@@ -185,7 +185,10 @@ def bill_of_materials(
         f"OD {_size(mm(tip.magnet_outer_diameter))}, ID {_size(mm(tip.magnet_inner_diameter))}, "
         f"length {_size(mm(tip.magnet_length))}",
         ring.get("mass_g"),
-        "mark each ring's north before fitting: it goes to the key's side (angle 0)",
+        "glue each ring with its north at its piece's angle 0: on the distal piece the stop "
+        f"key's centre line; on the proximal piece {d.key_angle_deg / 2:.1f} deg past the "
+        "notch's edge the key bears on with the rings parallel (where the key's centre sits "
+        "then); a compass or magnetic viewing film finds north",
         material="sintered NdFeB",
     )  # fmt: skip
     for row in field_rows(design):

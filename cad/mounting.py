@@ -26,8 +26,11 @@ The journal-in-sleeve keeps both rings coaxial; the end face on the shoulder kee
 face-to-face gap at ``design.tip.magnet_gap``; the key in the notch limits the relative rotation
 theta1 - theta2 to [0, ``design.tip.mounting.stop_angle``] (the rotational stops). Each
 piece carries a single-start helical tracking groove (:mod:`cad.tracking`) whose pitch
-lets its visible length read the groove range; it crosses local +X at the piece's
-proximal face (z = 0) and runs past both faces.
+lets its visible length read the groove range; its helix is phased to cross local +X at
+the piece's proximal face (z = 0), but it ends a wall short of either face, so where it
+starts is no mark of angle 0: the stop key's centre is (the distal piece's; on the
+proximal piece, where the key's centre sits against the notch's edge with the rings
+parallel).
 """
 
 from __future__ import annotations
