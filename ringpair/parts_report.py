@@ -11,6 +11,7 @@ import html
 from typing import Any
 
 from ringpair.html_page import table
+from ringpair.tables import page_number
 
 EFFECT_WORDS = {
     "near_field": "exact ring field",
@@ -34,7 +35,8 @@ def model_title(effects: frozenset[str] | set[str]) -> str:
 
 
 def _grams(x: Any) -> str:
-    return "" if x is None or x == "" else f"{float(x):.3g}"
+    """A mass in g, three significant digits, never an exponent (a 1,300 g magnet)."""
+    return "" if x is None or x == "" else page_number(float(x), 3)
 
 
 def bom_totals_words(bom: list[dict[str, Any]]) -> str:

@@ -46,6 +46,7 @@ from ringpair.tables import (
     TIGHT,
     check_rows,
     check_value_text,
+    page_number,
 )
 
 OBJECTIVE_WORDS = {
@@ -134,7 +135,7 @@ def _calibration_words(run: Run) -> str:
     if not cal:
         return ""
     values = "; ".join(
-        f"{file_key(name)} {value / file_unit(name)[1]:.4g}"
+        f"{file_key(name)} {page_number(value / file_unit(name)[1])}"
         for name, value in cal["values"].items()
     )
     out = (
@@ -244,9 +245,11 @@ def _design_section(doc: dict[str, Any]) -> str:
             r["quantity"],
             r["key"],
             r["unit"],
-            f"{r['start']:.4g}",
-            f"{r['optimum']:.4g}",
-            r["set_by"] if r["low"] is None else f"{r['low']:.4g} – {r['high']:.4g}",
+            page_number(r["start"]),
+            page_number(r["optimum"]),
+            r["set_by"]
+            if r["low"] is None
+            else f"{page_number(r['low'])} – {page_number(r['high'])}",
         ]
         for r in doc["design"]
     ]
@@ -285,11 +288,11 @@ def _design_section(doc: dict[str, Any]) -> str:
     c_rows = [
         [
             k,
-            f"{v['value']:.4g}",
-            f"{v['limit']:.4g}",
+            page_number(v["value"]),
+            page_number(v["limit"]),
             v["unit"],
             "active" if v["active"] else "",
-            f"{v['multiplier']:.2g}",
+            page_number(v["multiplier"], 2),
         ]
         for k, v in doc["constraints"].items()
     ]

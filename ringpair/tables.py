@@ -427,6 +427,25 @@ def check_rows(checks: list[dict[str, Any]]) -> tuple[list[dict], list[dict]]:
     return shown, rest
 
 
+NEGLIGIBLE = 1e-6
+"""A design quantity below this in its file unit (mm, MPa, deg, T, ...) is printed as 0: an
+optimiser's rounding (a 5e-11 mm gap), not a number anyone can make."""
+
+
+def page_number(value: Any, digits: int = 4) -> str:
+    """A number in file units for the page: ``digits`` significant digits, never an
+    exponent; 0 below NEGLIGIBLE, whole numbers with thousands grouped from 10,000 (a NiTi
+    modulus 60,000 MPa, not 6e+04); empty where it is not a finite number."""
+    if value is None or not math.isfinite(float(value)):
+        return ""
+    v = float(value)
+    if abs(v) < NEGLIGIBLE:
+        return "0"
+    if abs(v) >= 1e4:
+        return f"{v:,.0f}"
+    return np.format_float_positional(v, precision=digits, unique=False, fractional=False, trim="-")
+
+
 CHECK_DECIMALS = {"mm": 3, "deg": 2}
 """Decimals a CAD check's value is shown with, by unit: a micrometre, a hundredth of a
 degree (the checks' own tolerances are coarser)."""

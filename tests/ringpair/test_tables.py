@@ -90,3 +90,30 @@ def test_limits_the_stage_could_not_move_are_named_in_words_with_why():
     )
     assert seat["reason"] == "not moved: the study sets no limit for it"
     assert np.isnan(gap["gain"]) and np.isnan(seat["old"])
+
+
+def test_design_numbers_read_without_raw_exponents():
+    """Issue 52: the report's design table showed the optimum's ring gap as 5.108e-11 mm and
+    the NiTi modulus as 6e+04 MPa. Design quantities in file units print with four
+    significant digits, 0 below a millionth of the unit, thousands grouped, never an
+    exponent (drawn over 18 decades, both signs)."""
+    cases = {
+        5.108e-11: "0",
+        6e4: "60,000",
+        249.05: "249.1",
+        0.3922: "0.3922",
+        1.45: "1.45",
+        150.0: "150",
+        -9.81: "-9.81",
+        0.000123456: "0.0001235",
+        float("nan"): "",
+        None: "",
+    }
+    for value, text in cases.items():
+        assert tables.page_number(value) == text, value
+    rng = np.random.default_rng(5252)
+    for value in 10.0 ** rng.uniform(-12, 6, 400) * rng.choice([-1, 1], 400):
+        text = tables.page_number(float(value))
+        assert "e" not in text, value
+        if abs(value) >= tables.NEGLIGIBLE:  # the digits shown are the number's
+            assert float(text.replace(",", "")) == pytest.approx(value, rel=1e-3), value
