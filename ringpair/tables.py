@@ -334,7 +334,7 @@ def design_rows(study: Study, best: OptimizationResult) -> list[dict[str, Any]]:
                 "optimum": end,
                 "low": b.low / scale if b else None,
                 "high": b.high / scale if b else None,
-                "changed": not np.isclose(start, end, rtol=1e-9, atol=1e-12),
+                "changed": not np.isclose(start, end, rtol=1e-9, atol=NEGLIGIBLE),  # as printed
             }
         )
     b = study.bound("external_distance")
