@@ -223,7 +223,10 @@ def run_sweeps(
                 # the scheduler's HTTP server (metrics) starts even without a dashboard;
                 # a free port, not 8787, so a second cluster on the machine does not warn
                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                silence_logs=logging.ERROR,
+                # a worker whose heartbeat meets the scheduler already closed (Ctrl-C, a
+                # busy machine) logs an ERROR on its way out; a point's own failure comes
+                # back as its answer, a lost worker as its future's exception
+                silence_logs=logging.CRITICAL,
             )
         try:
             with Client(cluster if cluster is not None else scheduler) as client:
