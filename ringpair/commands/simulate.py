@@ -10,14 +10,20 @@ import numpy as np
 from rich.table import Table
 
 from design.contact import Contact, solve_design_in_contact
-from design.designfile import DesignError
 from design.equilibrium import Equilibria, solve_design, solve_sequence
 from design.geometry import rest_position
 from design.model import RingPairModel
-from design.moving import MovedSource, design_centre, moved, moved_source, pose_parameters
+from design.moving import MovedSource, pose_parameters
 from design.records import Design
 from design.stiffness import TipStiffness, tip_stiffness
 from design.units import MM
+from ringpair.moved_magnet import (
+    MAGNET_COLUMNS,
+    MAGNET_HEADS,
+    MagnetRequest,
+    magnet_options,
+    magnet_poses,
+)
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -25,13 +31,11 @@ from ringpair.options import (
     UserError,
     angle_option,
     angles,
-    bad_input,
     check_configurations,
     console,
     default_out,
     design_from,
     effects_option,
-    lengths,
     model_from,
     output_path,
     path_option,
@@ -78,29 +82,7 @@ memory bound: rows go to the CSV chunk by chunk)."""
     help="Skip the search for other stable states at each command (faster).",
 )
 @click.option("--quiet", is_flag=True, help="Do not print the table.")
-@click.option(
-    "--magnet-x",
-    default=None,
-    help="Move the magnet (the classical steering, beside the rings'): its centre's x "
-    "[mm, base frame] as START:STOP:STEP, a comma list or one value; every combination with "
-    "the ring angles and the other --magnet-* values is simulated. Default: the design's.",
-)
-@click.option("--magnet-y", default=None, help="The moved magnet's centre y [mm], same forms.")
-@click.option("--magnet-z", default=None, help="The moved magnet's centre z [mm], same forms.")
-@click.option(
-    "--magnet-turn",
-    default=None,
-    help="The moved magnet's magnetisation (a coil: its axis) turned about the base z axis "
-    "from the design's [deg], same forms. Default: 0.",
-)
-@click.option(
-    "--magnet",
-    "magnet_source",
-    default=None,
-    help="Which source the --magnet-* options move: 'external' (the [external_magnet]) or N "
-    "(field.sources N, from 1). Default: the external magnet, else the first source with a "
-    "position.",
-)
+@magnet_options
 @MAX_CONFIGS
 def simulate(
     design: Path | None,
@@ -111,11 +93,7 @@ def simulate(
     ordered: bool,
     no_multistable: bool,
     quiet: bool,
-    magnet_x: str | None,
-    magnet_y: str | None,
-    magnet_z: str | None,
-    magnet_turn: str | None,
-    magnet_source: str | None,
+    magnet: MagnetRequest,
     max_configs: int,
 ) -> None:
     """Tip pose of DESIGN for every (theta1, theta2): a table and a CSV.
@@ -144,9 +122,8 @@ def simulate(
         )
     t1 = angles(theta1, "--theta1")
     t2 = angles(theta2, "--theta2")
-    typed = {"x": magnet_x, "y": magnet_y, "z": magnet_z, "turn": magnet_turn}
-    moving = any(v is not None for v in typed.values()) or magnet_source is not None
-    source, poses = _poses(d, typed, magnet_source) if moving else (None, np.zeros((1, 4)))
+    moves = magnet_poses(d, magnet)
+    source, poses, moving = moves.source, moves.poses, moves.moving
     n = t1.size * t2.size * len(poses)
     what = "--theta1, --theta2 and --magnet-*" if moving else "--theta1 and --theta2"
     check_configurations(n, max_configs, what, held=ordered)
@@ -170,8 +147,8 @@ def simulate(
     tail: deque[dict] = deque(maxlen=SHOWN // 2)
     failures: Counter[str] = Counter()  # why rows have no state
     header = f"ringpair simulate, design '{d.name}', model {model.name}"
-    if source is not None:
-        header += f"\nmoved magnet: {source.label} ({source.kind})"
+    if moving:
+        header += "\n" + moves.label()
     solving = "solving equilibria (the first run on a machine compiles the model)"
     with progress(solving, total=n) as update, csv_writer(out, columns, header) as put:
         for start in range(0, n, step):
@@ -190,45 +167,10 @@ def simulate(
             update(advance=len(rows))
     if not quiet:
         shown = head if n <= SHOWN else head[: SHOWN // 2] + list(tail)
-        varied = tuple(c for c, v in zip(MAGNET_COLUMNS, poses.T, strict=True) if np.ptp(v) > 0)
-        _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)", varied)
+        _print_rows(shown, n, f"{d.name}: tip poses ({model.name} model)", moves.varied())
     if failures:
         warn(f"{failures.total()} configuration(s) have no state: " + "; ".join(sorted(failures)))
     console.print(f"wrote {out} ({n} configurations)")
-
-
-MAGNET_COLUMNS = ("magnet_x_mm", "magnet_y_mm", "magnet_z_mm", "magnet_turn_deg")
-"""The moved magnet's pose (--magnet-*): its centre (base frame) and turn about z."""
-MAGNET_HEADS = dict(
-    zip(
-        MAGNET_COLUMNS,
-        ("magnet x [mm]", "magnet y [mm]", "magnet z [mm]", "turn [deg]"),
-        strict=True,
-    )
-)
-
-
-def _poses(
-    d: Design, typed: dict[str, str | None], which: str | None
-) -> tuple[MovedSource, np.ndarray]:
-    """The moved source and its poses (P, 4): every combination of the typed centre
-    coordinates [m] (the design's where not typed) and turns [rad]; each pose checked."""
-    with bad_input(DesignError):
-        source = moved_source(d, which)
-    centre = design_centre(d, source) / MM
-    values = [
-        centre[i : i + 1] if typed[a] is None else lengths(str(typed[a]), f"--magnet-{a}")
-        for i, a in enumerate("xyz")
-    ]
-    turns = np.zeros(1) if typed["turn"] is None else angles(str(typed["turn"]), "--magnet-turn")
-    grids = np.meshgrid(*values, turns, indexing="ij")
-    poses = np.column_stack([g.ravel() for g in grids])
-    poses[:, :3] *= MM
-    poses[:, 3] = np.deg2rad(poses[:, 3])
-    with bad_input(DesignError):  # every pose before any work
-        for pose in poses:
-            moved(d, source, pose[:3], float(pose[3]))
-    return source, poses
 
 
 def _states(

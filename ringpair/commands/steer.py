@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -27,6 +28,16 @@ from design.paths import (
 from design.records import Design
 from design.steering import REACHED, Steering, steer
 from design.units import MM
+from ringpair.moved_magnet import (
+    MAGNET_COLUMNS,
+    MAGNET_HEADS,
+    MagnetPoses,
+    MagnetRequest,
+    magnet_options,
+    magnet_poses,
+    pose_words,
+    row_poses,
+)
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -41,6 +52,7 @@ from ringpair.options import (
     model_from,
     output_path,
     path_option,
+    progress,
 )
 from ringpair.plots import plot_path
 from ringpair.pressing import PRESS_STEP, steer_press
@@ -109,6 +121,11 @@ def parse_target(text: str, where: str) -> tuple[float, float]:
 
 def read_targets(path: Path) -> list[tuple[float, float]]:
     """Targets from a CSV with columns y_mm, z_mm (lines starting with # are comments). [mm]"""
+    return _target_file(path)[0]
+
+
+def _target_file(path: Path) -> tuple[list[tuple[float, float]], list[dict]]:
+    """The targets of a CSV (:func:`read_targets`) [mm] and its rows as read (text)."""
     try:
         lines = [line for line in read_regular(path).splitlines() if not line.startswith("#")]
     except (OSError, UnicodeDecodeError) as exc:
@@ -119,13 +136,14 @@ def read_targets(path: Path) -> list[tuple[float, float]]:
         raise UserError(
             f"{path}: expected columns y_mm, z_mm; missing {', '.join(sorted(missing))}"
         )
+    rows = list(reader)
     targets = [
         parse_target(f"{row['y_mm']},{row['z_mm']}", f"{path} line {k + 2}")
-        for k, row in enumerate(reader)
+        for k, row in enumerate(rows)
     ]
     if not targets:
         raise UserError(f"{path}: no targets (expected rows of y_mm, z_mm)")
-    return targets
+    return targets, rows
 
 
 def steer_rows(result: Steering) -> list[dict]:
@@ -166,7 +184,12 @@ def steer_rows(result: Steering) -> list[dict]:
     metavar="Y,Z",
     help="A target for the tip: its y and z in mm, base frame (repeat for more).",
 )
-@path_option("--targets", help="CSV of targets, columns y_mm, z_mm.")
+@path_option(
+    "--targets",
+    help="CSV of targets, columns y_mm, z_mm; with any of magnet_x_mm, magnet_y_mm, "
+    "magnet_z_mm, magnet_turn_deg, the magnet's pose for each target (the design's where a "
+    "column is absent).",
+)
 @click.option(
     "--path",
     "path_spec",
@@ -213,6 +236,7 @@ def steer_rows(result: Steering) -> list[dict]:
     "--path, and its plot beside it as .png; with --path the name must end in .csv).",
 )
 @effects_option("default")
+@magnet_options
 @click.option(
     "--max-targets",
     type=click.IntRange(1, None),
@@ -235,6 +259,7 @@ def steer_command(
     step: float | None,
     out: Path | None,
     effects: str,
+    magnet: MagnetRequest,
     max_targets: int,
     max_configs: int,
     quiet: bool,
@@ -265,9 +290,18 @@ def steer_command(
     angles; every point where they cross the lines of a --step grid, located to 0.0001 mN.
     One row per answer with simulate's columns (contact force, point, stiffness), the
     force map with the answers marked beside the CSV (.png).
+
+    A moved magnet (--magnet-*, the classical steering combined with the rings'): targets
+    are steered at every combination of the typed poses (or each at its own pose, from
+    the --targets file's magnet columns), the pose in magnet_x_mm, magnet_y_mm,
+    magnet_z_mm, magnet_turn_deg after target_z_mm; --path and --press hold the magnet at
+    one pose.
     """
     d = design_from(design)
     model = model_from(effects).for_design(d)
+    moves = magnet_poses(d, magnet)
+    if press is not None or path_spec is not None:
+        d = moves.one("--press" if press is not None else "--path").design(d, 0)
     if press is not None:
         if to or targets is not None or path_spec is not None:
             raise UserError(
@@ -287,16 +321,28 @@ def steer_command(
     if points is not None or center is not None or closed:
         raise UserError("--points, --center and --closed belong to --path")
     wanted = [parse_target(t, "--to") for t in to]
+    file_rows: list[dict] = []
     if targets is not None:
-        wanted += read_targets(targets)
+        more, file_rows = _target_file(targets)
+        wanted += more
     if not wanted:
         raise UserError("give a target: --to Y,Z (mm), --targets FILE.csv or --path SPEC")
     _within_reach(d, wanted)
-    n = len(wanted)
+    at_pose = _target_poses(d, moves, magnet, targets, file_rows, len(to))
+    if at_pose is None:  # every target at every typed pose
+        poses = list(range(len(moves.poses)))
+        pairs = [np.arange(len(wanted))] * len(poses)
+    else:  # each target at its own pose, each distinct pose solved once
+        moves = at_pose
+        _, first, which = np.unique(moves.poses, axis=0, return_index=True, return_inverse=True)
+        poses = [int(k) for k in np.sort(first)]
+        pairs = [np.flatnonzero(which == which[k]) for k in poses]
+    n = sum(len(p) for p in pairs)
     check_request(
         n,
         max_targets,
-        " and ".join(o for o, given in (("--to", to), ("--targets", targets)) if given),
+        " and ".join(o for o, given in (("--to", to), ("--targets", targets)) if given)
+        + " and --magnet-*" * (moves.moving and at_pose is None),
         f"{n:,} targets",
         n * TARGET_SECONDS,
         "--max-targets",
@@ -308,17 +354,49 @@ def steer_command(
         typed=out is not None,
         inputs=[design, targets],
     )
-    with console.status(
-        f"steering to {len(wanted)} target(s) (the first run on a machine compiles the model)"
-    ):
-        result = steer(model, model.parameters(d), np.array(wanted) * MM)
-    rows = steer_rows(result)
-    write_csv(
-        out, rows, STEER_COLUMNS, header=f"ringpair steer, design '{d.name}', model {model.name}"
-    )
+    rows: list[dict] = []
+    steering = "steering (the first run on a machine compiles the model)"
+    with progress(steering, total=n) as update:
+        for pose, chosen in zip(poses, pairs, strict=True):
+            params = model.parameters(moves.design(d, pose))
+            result = steer(model, params, np.array(wanted)[chosen] * MM)
+            for row in steer_rows(result):
+                row["target"] = int(chosen[row["target"] - 1]) + 1
+                rows.append(row | (moves.columns(pose) if moves.moving else {}))
+            update(advance=len(chosen))
+    if at_pose is not None:
+        rows.sort(key=lambda row: row["target"])
+    columns: tuple[str, ...] = STEER_COLUMNS
+    if moves.moving:
+        columns = STEER_COLUMNS[:3] + MAGNET_COLUMNS + STEER_COLUMNS[3:]
+    header = f"ringpair steer, design '{d.name}', model {model.name}"
+    write_csv(out, rows, columns, header=header + (f"\n{moves.label()}" if moves.moving else ""))
     if not quiet:
-        _print(rows, f"{d.name}: ring angles for each target ({model.name} model)")
-    console.print(f"wrote {out} ({len(wanted)} target(s), {len(rows)} row(s))")
+        title = f"{d.name}: ring angles for each target ({model.name} model)"
+        _print(rows, title, moves.varied())
+    at = f" at {len(poses)} magnet pose(s)" * (moves.moving and at_pose is None)
+    console.print(f"wrote {out} ({len(wanted)} target(s){at}, {len(rows)} row(s))")
+
+
+def _target_poses(
+    d: Design,
+    moves: MagnetPoses,
+    magnet: MagnetRequest,
+    targets: Path | None,
+    file_rows: list[dict],
+    typed: int,
+) -> MagnetPoses | None:
+    """The pose of each target from the --targets file's magnet columns, or None where it
+    has none (the typed --magnet-* poses then apply to every target)."""
+    if not file_rows or not set(MAGNET_COLUMNS) & set(file_rows[0]):
+        return None
+    if typed or moves.moving and replace(magnet, source=None).given:
+        raise UserError(
+            f"{targets} gives the magnet's pose for each target (columns "
+            f"{', '.join(c for c in MAGNET_COLUMNS if c in file_rows[0])}); give its targets "
+            "without --to, --magnet-x, --magnet-y, --magnet-z or --magnet-turn"
+        )
+    return row_poses(d, magnet.source, file_rows, str(targets))
 
 
 def _within_reach(d: Design, wanted: list[tuple[float, float]]) -> None:
@@ -518,11 +596,13 @@ def _ranges(steps: np.ndarray) -> str:
     return ", ".join(parts)
 
 
-def _print(rows: list[dict], title: str) -> None:
-    """The solutions as a table, then a plain sentence for each target out of reach."""
+def _print(rows: list[dict], title: str, magnet: tuple[str, ...] = ()) -> None:
+    """The solutions as a table (with the moved magnet's pose columns ``magnet``, those
+    that vary), then a plain sentence for each target out of reach."""
     table = Table(title=title)
     for col in (
         "target [mm]",
+        *(MAGNET_HEADS[c] for c in magnet),
         "theta1 [deg]",
         "theta2 [deg]",
         "tip y, z [mm]",
@@ -541,6 +621,7 @@ def _print(rows: list[dict], title: str) -> None:
             state = "out of reach"
         table.add_row(
             f"{row['target_y_mm']:.2f}, {row['target_z_mm']:.2f}",
+            *(f"{row[c]:.2f}" for c in magnet),
             f"{row['theta1_deg']:.3f}",
             f"{row['theta2_deg']:.3f}",
             f"{row['y_mm']:.3f}, {row['z_mm']:.3f}",
@@ -551,6 +632,8 @@ def _print(rows: list[dict], title: str) -> None:
     console.print(f"reached: the tip within {REACHED / MM:g} mm of the target.")
     for row in rows:
         where = f"target {row['target']} ({row['target_y_mm']:g}, {row['target_z_mm']:g}) mm"
+        if magnet:
+            where += f" ({pose_words(row, magnet)})"
         if not row["stable"]:
             console.print(f"{where}: no configuration near it has a state.")
         elif not row["reached"]:

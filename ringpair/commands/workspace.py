@@ -15,6 +15,7 @@ from design.records import Design
 from design.stiffness import tip_stiffness
 from design.units import MM
 from design.workspace import NoWorkspace, Workspace, angle_grid, sweep_workspace
+from ringpair.moved_magnet import MAGNET_COLUMNS, MagnetRequest, magnet_options, magnet_poses
 from ringpair.options import (
     DESIGN,
     MAX_CONFIGS,
@@ -57,9 +58,15 @@ FILES = (
 )
 @grid_step_option(5.0)
 @effects_option("default")
+@magnet_options
 @MAX_CONFIGS
 def workspace(
-    design: Path | None, out: Path | None, step: float, effects: str, max_configs: int
+    design: Path | None,
+    out: Path | None,
+    step: float,
+    effects: str,
+    magnet: MagnetRequest,
+    max_configs: int,
 ) -> None:
     """Sweep (theta1, theta2) over full turns and map the reachable tip set of DESIGN.
 
@@ -72,10 +79,15 @@ def workspace(
     about the straight tip and the neutral (antiparallel) deflection; writes
     workspace.csv, summary.json, top.png (x-y), side.png (x-z), section.png (y-z),
     deflection.png (deflection against theta1 with theta2 = 0) and controllable.png.
+    With --magnet-* (one value each) the magnet is held at that pose: the ring pair's
+    workspace there, to compare with the design's (summary.json says the pose).
     """
     from ringpair.plots import plot_controllable, write_workspace_plots
 
     d = design_from(design)
+    moves = magnet_poses(d, magnet).one("workspace")
+    d = moves.design(d, 0)
+    held = f"\n{moves.label()} at {_pose_text(moves.columns(0))}" if moves.moving else ""
     if d.environment.obstacles:
         raise UserError(
             "workspace: the full-turn map with environment.obstacles is not made yet; "
@@ -111,9 +123,11 @@ def workspace(
             ),
             POSE_COLUMNS,
             header=f"ringpair workspace, design '{d.name}', grid step {step:g} deg, "
-            f"model {model.name}",
+            f"model {model.name}{held}",
         )
         summary = workspace_summary(ws, d, step, model.name, ctl)
+        if moves.source is not None:
+            summary["moved_magnet"] = {"source": moves.source.label} | moves.columns(0)
         write_text(out / "summary.json", json_text(summary))
         pictures = write_workspace_plots(ws, sweep, d, out)
         plot_controllable(ws, ctl, out / "controllable.png", model.name)
@@ -183,8 +197,17 @@ def workspace_summary(
     return out
 
 
+def _pose_text(pose: dict) -> str:
+    """A held pose (MAGNET_COLUMNS) as 'x, y, z mm, turned T deg'."""
+    return "{:g}, {:g}, {:g} mm, turned {:g} deg".format(*(pose[c] for c in MAGNET_COLUMNS))
+
+
 def _print_summary(s: dict) -> None:
-    table = Table(title=f"workspace of '{s['design']}' ({s['model']} model)")
+    title = f"workspace of '{s['design']}' ({s['model']} model)"
+    if "moved_magnet" in s:
+        m = s["moved_magnet"]
+        title += f", {m['source']} at {_pose_text(m)}"
+    table = Table(title=title)
     table.add_column("metric")
     table.add_column("value", justify="right")
     table.add_row(
