@@ -202,6 +202,14 @@ def sweep_workspace(
     return sweep(model, model.parameters(design), design.robot.free_length, step, multistable)
 
 
+def _torus(g: int) -> np.ndarray:
+    """Each node's four neighbours on the g x g grid of ring angles (periodic), shape
+    (g * g, 4)."""
+    index = np.arange(g * g).reshape(g, g)
+    moves = [np.roll(index, s, axis=a).ravel() for a in (0, 1) for s in (1, -1)]
+    return np.stack(moves, axis=1)
+
+
 def sweep(
     model: RingPairModel,
     params: np.ndarray,
@@ -213,7 +221,9 @@ def sweep(
     ``free_length`` [m] placing the straight tip."""
     angles = angle_grid(step)
     t1, t2 = np.meshgrid(angles, angles, indexing="ij")
-    grid = solve_equilibria(model, params, t1.ravel(), t2.ravel(), multistable=multistable)
+    grid = solve_equilibria(
+        model, params, t1.ravel(), t2.ravel(), multistable=multistable, neighbours=_torus(len(angles))
+    )
     loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
     parallel = solve_equilibria(model, params, loop, loop)
     antiparallel = solve_equilibria(model, params, loop + np.pi, loop)

@@ -34,7 +34,8 @@ Hessian) and clear of the external magnet. Anything else is NaN, with the reason
 ``failure``. On request (``multistable=True``) other stable states at the same command
 are looked for, from the straight robot at full load, from the mirror image of the state
 and, with torsion, from the rings' lags mirrored; ``multistable`` flags where one is found
-(a search, so a lower bound on multistability).
+(a search, so a lower bound on multistability); on a grid of commands (``neighbours``)
+a state found at one node is driven to its neighbours, following its branch.
 
 Batches run through compiled CasADi functions mapped over columns; the per-column ramp
 logic is vectorised in numpy. SI units are used for all inputs and outputs.
@@ -43,18 +44,19 @@ The package, one concept per module: :mod:`~design.equilibrium.settings` (tolera
 step controls), :mod:`~design.equilibrium.kernels` (the compiled functions),
 :mod:`~design.equilibrium.stability`, :mod:`~design.equilibrium.newton`,
 :mod:`~design.equilibrium.fall`, :mod:`~design.equilibrium.ramp` (the load ramp),
-:mod:`~design.equilibrium.finish` (final states), :mod:`~design.equilibrium.paths`
-(driven paths) and :mod:`~design.equilibrium.solve` (the entries). The names below are
-re-exported here; the settings are read from :mod:`design.equilibrium.settings` (change
-them there).
+:mod:`~design.equilibrium.finish` (final states), :mod:`~design.equilibrium.drive`
+(states driven in batch), :mod:`~design.equilibrium.paths` (driven paths) and
+:mod:`~design.equilibrium.solve` (the entries). The names below are re-exported here; the
+settings are read from :mod:`design.equilibrium.settings` (change them there).
 """
 
 from __future__ import annotations
 
 from design.equilibrium import settings
+from design.equilibrium.drive import drive
 from design.equilibrium.finish import Equilibria
 from design.equilibrium.kernels import kernels
-from design.equilibrium.paths import drive, solve_sequence
+from design.equilibrium.paths import solve_sequence
 from design.equilibrium.settings import (
     CHUNK,
     CONTRACTION,

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from design.equilibrium import settings
+from design.equilibrium.drive import drive
 from design.equilibrium.fall import _fall
 from design.equilibrium.kernels import _initial
 from design.equilibrium.newton import _check, _Checks, _newton
@@ -70,9 +71,11 @@ def _finish(
     failure: np.ndarray,
     checks: _Checks,
     multistable: bool = False,
+    neighbours: np.ndarray | None = None,
 ) -> Equilibria:
     """Check the states reached at full load (an unstable one falls once more), poses, and
-    the optional search for other stable states."""
+    the optional search for other stable states (continued to ``neighbours``:
+    :func:`_other_stable_states`)."""
     n_cols = command.shape[1]
     x = np.where(reached, x, np.nan)
     todo = np.flatnonzero(~checks.done)
@@ -107,7 +110,7 @@ def _finish(
     failure[touching] = settings.FAILURES["contact"]
     multi = np.zeros(n_cols, bool)
     if multistable and stable.any():
-        multi = _other_stable_states(model, params, command, x, stable)
+        multi = _other_stable_states(model, params, command, x, stable, neighbours)[0]
     r, _, position, frame, angles, _ = outs
     nan = np.where(stable, 1.0, np.nan)
     frames = frame.T.reshape(n_cols, 3, 3).transpose(0, 2, 1) * nan[:, None, None]
@@ -143,11 +146,18 @@ def _other_stable_states(
     command: np.ndarray,
     x: np.ndarray,
     stable: np.ndarray,
-) -> np.ndarray:
-    """Whether another stable state exists at each command: Newton (then, if it lands on
+    neighbours: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Whether another stable state exists at each command, and the one found (n, N; NaN
+    where none): Newton (then, if it lands on
     an unstable equilibrium, a fall from there) from the straight robot at full load, from
     the mirror image of the state and, with torsion, from the state with the rings' lags
-    mirrored."""
+    mirrored. With ``neighbours`` (shape (N, k), the columns next to each, -1 for none)
+    another state found at a command is driven to its neighbours (:func:`drive`: sub-steps
+    of Newton, never across a fold), until none is new:
+    Newton from a far start lands in whichever basin its path meets, so a change of the
+    design by a part in 10^8 can move it, while a branch found anywhere on a grid is
+    followed over the grid."""
     n_cols = command.shape[1]
     starts = [_initial(model, params, command), _mirror(model, x)]
     if model.n_unknowns > model.n_rod:
@@ -156,29 +166,70 @@ def _other_stable_states(
         starts.append(lagged)
     scale = _scale(model, params, n_cols)
     found = np.zeros(n_cols, bool)
+    others = np.full_like(x, np.nan)
     for start in starts:
         todo = np.flatnonzero(stable & ~found)
         if todo.size == 0:
             break
-        p, c, ones = _columns(params, todo), command[:, todo], np.ones(todo.size)
-        scratch = _Checks(todo.size)
-        local = np.arange(todo.size)
-        states, converged, good = _newton(
-            model, p, c, start[:, todo], ones, scratch, local, known=x[:, todo]
-        )
-        unstable = np.flatnonzero(converged & ~good)
-        if unstable.size:
-            fallen, ok, _ = _fall(
-                model,
-                _columns(p, unstable),
-                c[:, unstable],
-                states[:, unstable],
-                ones[unstable],
-                scratch,
-                unstable,
+        _search(model, params, command, x, scale, todo, start[:, todo], found, others)
+    fresh = found.copy()
+    while neighbours is not None and fresh.any():
+        before = found.copy()
+        for j in range(neighbours.shape[1]):
+            near = neighbours[:, j]
+            todo = np.flatnonzero(stable & ~found & (near >= 0) & fresh[near])
+            if todo.size == 0:
+                continue
+            src = near[todo]
+            # Driven from the neighbour's command the short way round (periodic in 2 pi).
+            turn = np.pi - np.mod(np.pi - (command[:, todo] - command[:, src]), 2 * np.pi)
+            driven, ok = drive(model, _columns(params, src), others[:, src], command[:, src],
+                               command[:, src] + turn)  # fmt: skip
+            if model.n_unknowns > model.n_rod:  # its ring angles at this node's command
+                driven[model.n_rod :] += command[:, todo] - (command[:, src] + turn)
+            converged, good, _ = _check(
+                model, _columns(params, todo), command[:, todo], np.nan_to_num(driven)
             )
-            states[:, unstable] = fallen
-            good[unstable] = ok
-        distinct = _norm(states - x[:, todo], scale[:, todo]) > settings.DISTINCT
-        found[todo[good & distinct]] = True
-    return found
+            ok &= (
+                converged & good & (_norm(driven - x[:, todo], scale[:, todo]) > settings.DISTINCT)
+            )
+            found[todo[ok]] = True
+            others[:, todo[ok]] = driven[:, ok]
+        fresh = found & ~before
+    return found, others
+
+
+def _search(
+    model: RingPairModel,
+    params: np.ndarray,
+    command: np.ndarray,
+    x: np.ndarray,
+    scale: np.ndarray,
+    todo: np.ndarray,
+    start: np.ndarray,
+    found: np.ndarray,
+    others: np.ndarray,
+) -> None:
+    """One start per column ``todo``: Newton, a fall where it lands on an unstable
+    equilibrium; a stable state distinct from x is marked in ``found`` and kept in
+    ``others`` (both updated in place)."""
+    p, c, ones = _columns(params, todo), command[:, todo], np.ones(todo.size)
+    scratch = _Checks(todo.size)
+    local = np.arange(todo.size)
+    states, converged, good = _newton(model, p, c, start, ones, scratch, local, known=x[:, todo])
+    unstable = np.flatnonzero(converged & ~good)
+    if unstable.size:
+        fallen, ok, _ = _fall(
+            model,
+            _columns(p, unstable),
+            c[:, unstable],
+            states[:, unstable],
+            ones[unstable],
+            scratch,
+            unstable,
+        )
+        states[:, unstable] = fallen
+        good[unstable] = ok
+    new = good & (_norm(states - x[:, todo], scale[:, todo]) > settings.DISTINCT)
+    found[todo[new]] = True
+    others[:, todo[new]] = states[:, new]

@@ -22,6 +22,7 @@ def solve_equilibria(
     theta2: ArrayLike,
     *,
     multistable: bool = False,
+    neighbours: np.ndarray | None = None,
     max_load_step: float = settings.MAX_LOAD_STEP,
 ) -> Equilibria:
     """The state of each configuration on its own (commanded ring angles (theta1[i],
@@ -32,6 +33,10 @@ def solve_equilibria(
         per configuration, shape (k, N). [SI]
     multistable : also look for other stable states at each command (costs a few more
         solves per configuration).
+    neighbours : shape (N, k), the configurations next to each (-1 for none; a grid's):
+        another stable state found at one is looked for from there at its neighbours,
+        so that the search follows a branch instead of depending on where Newton from a
+        far start lands.
     max_load_step : largest step of the load ramp (smaller: a finer ramp, for checks).
     ``hysteresis`` needs an order, so here it is ignored (the commands are taken as reached
     from the centre of the play); use :func:`solve_sequence` for ordered commands.
@@ -40,7 +45,9 @@ def solve_equilibria(
     command = _commands(theta1, theta2)
     checks = _Checks(command.shape[1])
     x, reached, snapped, failure = _ramp(model, params, command, checks, max_load_step)
-    return _finish(model, params, command, x, reached, snapped, failure, checks, multistable)
+    return _finish(
+        model, params, command, x, reached, snapped, failure, checks, multistable, neighbours
+    )
 
 
 def stable_states(

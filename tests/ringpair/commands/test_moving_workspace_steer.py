@@ -44,7 +44,10 @@ def _clear_poses(d, rng, seed):
                     moved(d, source, np.array([x, y, centre[2]]) * MM, np.deg2rad(t))
         except DesignError:
             continue
-        return (float(x), tuple(map(float, ys)), float(centre[2])), tuple(map(float, turns))
+        # To the digits the options are typed with, so that both routes hold one pose
+        # (states near a fold move by 1e-5 mm with a pose 1e-6 mm away).
+        typed = [round(float(v), 6) for v in (x, *ys, centre[2], *turns)]
+        return (typed[0], tuple(typed[1:3]), typed[3]), tuple(typed[4:])
     pytest.fail(f"seed {seed}: no poses clear of the robot in 50 draws")
 
 
@@ -107,6 +110,9 @@ def test_the_workspace_at_a_moved_pose_is_the_design_file_with_its_magnet_there(
             assert mine[key] == value, f"seed {seed}: {key}"
             continue
         numbers = np.ravel(list(value.values()) if isinstance(value, dict) else value)
+        if value is None or isinstance(value, int):  # nulls and counts: exactly
+            assert mine[key] == value, f"seed {seed}: {key}"
+            continue
         np.testing.assert_allclose(
             np.ravel(list(mine[key].values()) if isinstance(value, dict) else mine[key]),
             numbers.astype(float),
@@ -130,20 +136,25 @@ def test_steered_angles_at_moved_poses_put_the_design_files_tip_on_target(
     every target is reached at its pose."""
     seed = _seed()
     rng = np.random.default_rng(seed)
-    d = random_design(rng)
-    save_design(d, tmp_path / "d.toml")
-    (x, ys, z), turns = _clear_poses(d, rng, seed)
-    poses = [(np.array([x, ys[k], z]), turns[k]) for k in range(2)]
-    angles = rng.uniform(0.0, 360.0, (2, 2))
-    wanted = []  # (pose, y, z) per target
-    for k, (pose, turn) in enumerate(poses):
-        out = tmp_path / f"sim{k}.csv"
-        there = _there(d, pose, turn, tmp_path / f"pose{k}.toml")
-        result = run("simulate", str(there), "--theta1", ",".join(f"{t:.4f}" for t in angles[0]),
-                     "--theta2", f"{angles[1, k]:.4f}", "--quiet", "--out", str(out))  # fmt: skip
-        assert result.exit_code == 0, f"seed {seed}: {result.output}"
-        wanted += [(k, float(r["y_mm"]), float(r["z_mm"])) for r in read_csv(out) if r["y_mm"]]
-    assert wanted, f"seed {seed}: no drawn configuration has a state"
+    for _ in range(10):  # a set-up with states at its drawn angles (a drawn one may have none)
+        d = random_design(rng)
+        save_design(d, tmp_path / "d.toml")
+        (x, ys, z), turns = _clear_poses(d, rng, seed)
+        poses = [(np.array([x, ys[k], z]), turns[k]) for k in range(2)]
+        angles = rng.uniform(0.0, 360.0, (2, 2))
+        wanted = []  # (pose, y, z) per target
+        for k, (pose, turn) in enumerate(poses):
+            out = tmp_path / f"sim{k}.csv"
+            there = _there(d, pose, turn, tmp_path / f"pose{k}.toml")
+            theta1 = ",".join(f"{t:.4f}" for t in angles[0])
+            result = run("simulate", str(there), "--theta1", theta1, "--theta2",
+                         f"{angles[1, k]:.4f}", "--quiet", "--out", str(out))  # fmt: skip
+            assert result.exit_code == 0, f"seed {seed}: {result.output}"
+            wanted += [(k, float(r["y_mm"]), float(r["z_mm"])) for r in read_csv(out) if r["y_mm"]]
+        if wanted:
+            break
+    else:
+        pytest.fail(f"seed {seed}: no drawn configuration has a state in 10 set-ups")
     base = tmp_path / "d.toml"
     out = tmp_path / "steer.csv"
     if per_row:
