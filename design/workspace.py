@@ -222,7 +222,12 @@ def sweep(
     angles = angle_grid(step)
     t1, t2 = np.meshgrid(angles, angles, indexing="ij")
     grid = solve_equilibria(
-        model, params, t1.ravel(), t2.ravel(), multistable=multistable, neighbours=_torus(len(angles))
+        model,
+        params,
+        t1.ravel(),
+        t2.ravel(),
+        multistable=multistable,
+        neighbours=_torus(len(angles)),
     )
     loop = angle_grid(2 * np.pi / LOOP_SAMPLES)
     parallel = solve_equilibria(model, params, loop, loop)

@@ -89,6 +89,7 @@ def substeps(turn: float) -> int:
     a column is driven alike in whichever batch it comes."""
     return max(1, int(np.ceil(turn / SUBSTEP * (1 - 1e-12))))
 
+
 SNAP_LAG_JUMP = 0.1
 """A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
 jump to another branch of equilibria (snap-through). [rad]"""
