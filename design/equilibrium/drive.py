@@ -30,7 +30,7 @@ def drive(
     scale = _scale(model, params, n_cols)
     x = x.copy()
     ok = np.isfinite(x).all(axis=0)
-    n_sub = settings.substeps(float(np.max(np.abs(end - start), initial=0.0)))
+    n_sub = max(1, int(np.ceil(np.max(np.abs(end - start), initial=0.0) / settings.SUBSTEP)))
     ones = np.ones((1, n_cols))
     tolerance = float(settings.step_tolerance(np.ones(1))[0])
     for k in range(1, n_sub + 1):

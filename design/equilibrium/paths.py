@@ -120,7 +120,7 @@ def solve_sequence(
             x, snapped[k], failure[k] = alone(b, pb)
             states.append(x)
             continue
-        n_sub = settings.substeps(float(np.abs(b - a).max()))
+        n_sub = max(1, int(np.ceil(np.abs(b - a).max() / settings.SUBSTEP)))
         path = a[:, None] + np.outer(b - a, np.arange(n_sub + 1) / n_sub)  # (2, n_sub + 1)
         lag = lags(prev, a)
         j = 0

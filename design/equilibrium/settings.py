@@ -81,15 +81,6 @@ DISTINCT = 1e-6
 """Two states differ when their unknowns differ by more than this, dimensionless. [-]"""
 SUBSTEP = np.deg2rad(1.0)
 """Largest command increment per solve along a path. [rad]"""
-
-
-def substeps(turn: float) -> int:
-    """Sub-steps of at most SUBSTEP for a command change ``turn`` [rad]: a whole number of
-    SUBSTEP takes that many (20 deg is 20 sub-steps, not 21 from its last bit), so that
-    a column is driven alike in whichever batch it comes."""
-    return max(1, int(np.ceil(turn / SUBSTEP * (1 - 1e-12))))
-
-
 SNAP_LAG_JUMP = 0.1
 """A change of a ring's lag (tip angle - command) larger than this within one sub-step is a
 jump to another branch of equilibria (snap-through). [rad]"""

@@ -84,7 +84,15 @@ def test_another_state_driven_to_a_neighbouring_command_is_found_there(draw):
         there = _tips(model, params, np.nan_to_num(driven), end)
         own = _tips(model, params, x[:, dst], command[:, dst])
         distinct = ok & (np.linalg.norm(there - own, axis=0) > 10 * SAME)
-        missed = dst[distinct & ~found[dst]]
+        # drive's sub-step count is its batch's largest turn over SUBSTEP, which for a
+        # 20 deg turn is 20 or 21 by the last bit; near a fold that decides whether the
+        # state gets across, so a miss counts where the column alone gets across too.
+        miss = np.flatnonzero(distinct & ~found[dst])
+        solo = [
+            drive(model, params, others[:, src[[i]]], start[:, [i]], end[:, [i]])[1][0]
+            for i in miss
+        ]
+        missed = dst[miss[np.array(solo, bool)]] if miss.size else miss
         assert missed.size == 0, (
             f"seed {seed}: another state driven to nodes {missed.tolist()[:5]} is not found there"
         )
