@@ -49,6 +49,10 @@ class Fit:
     step: float = 1.0
     span: float = np.inf
 
+    def physical(self, u: float, p0: float) -> float:
+        """The parameter's value [SI] at fit unit ``u`` about its nominal value ``p0`` [SI]."""
+        return p0 * float(np.exp(u)) if self.kind == "log" else p0 + self.step * u
+
 
 @dataclass(frozen=True)
 class Parameter:

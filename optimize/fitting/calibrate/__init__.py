@@ -97,7 +97,14 @@ from optimize.fitting.calibrate.result import (
     row_sigma,
     straight_miss,
 )
-from optimize.fitting.calibrate.starts import calibrate_from_starts, path_matters, stiff_start
+from optimize.fitting.calibrate.starts import (
+    REPEAT_APART,
+    calibrate_from_starts,
+    path_matters,
+    prior_starts,
+    repeats_disagree,
+    stiff_start,
+)
 from optimize.fitting.paper_grid import (
     PAPER_FIELD_GRID,
     PAPER_STIFFNESS_GRID,
@@ -149,6 +156,9 @@ __all__ = [
     "_continued",
     "calibrate_from_starts",
     "stiff_start",
+    "prior_starts",
+    "repeats_disagree",
+    "REPEAT_APART",
     "configuration_folds",
     "cross_validate",
     "default_free",

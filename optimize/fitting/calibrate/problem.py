@@ -100,7 +100,7 @@ class _Problem:
     def params(self, u: np.ndarray) -> np.ndarray:
         p = self.base.copy()
         for j, (spec, p0) in enumerate(zip(self.spec, self.p0, strict=True)):
-            p[self.idx[j]] = p0 * np.exp(u[j]) if spec.kind == "log" else p0 + spec.step * u[j]
+            p[self.idx[j]] = spec.physical(u[j], p0)
         return p
 
     def dp_du(self, u: np.ndarray) -> np.ndarray:

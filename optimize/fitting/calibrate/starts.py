@@ -13,10 +13,16 @@ import numpy as np
 
 from design.model import RingPairModel, model_for
 from design.records import Design
-from design.registry import index
+from design.registry import PARAMETERS
 from optimize.fitting.calibrate.fit import calibrate
-from optimize.fitting.calibrate.policy import NESTED_START, SOFT_START, default_free
-from optimize.fitting.calibrate.result import CalibrationResult
+from optimize.fitting.calibrate.policy import (
+    FREE_PARAMETERS,
+    NESTED_START,
+    SOFT_START,
+    default_free,
+)
+from optimize.fitting.calibrate.priors import Priors, prior_widths
+from optimize.fitting.calibrate.result import CalibrationResult, row_sigma
 from optimize.fitting.measurements import Measurements
 from optimize.fitting.sensitivity import predict
 
@@ -39,6 +45,49 @@ def path_matters(
     driven = predict(model, params, m, ordered="driven").equilibria.position
     same_solved = np.array_equal(np.isnan(fast), np.isnan(driven))
     return not (same_solved and np.nanmax(np.abs(fast - driven), initial=0.0) < 1e-6)
+
+
+REPEAT_APART = 5.0
+"""Two rows of one command measured further apart than this many sigmas of their
+difference show a state that depends on the path the bench drove. [-]"""
+
+
+def repeats_disagree(m: Measurements, sigma: float | None = None) -> bool:
+    """Whether two rows of one command were measured more than REPEAT_APART sigmas apart
+    (their difference's, over the coordinates both measured; rows' sigmas by
+    :func:`row_sigma`): the robot on the bench was multistable there, whatever the model
+    says at the nominal design."""
+    s = row_sigma(m, sigma)
+    _, group = np.unique(m.command, axis=0, return_inverse=True)
+    for g in np.unique(group):
+        rows = np.flatnonzero(group.ravel() == g)
+        for a, i in enumerate(rows):
+            for j in rows[a + 1 :]:
+                both = m.measured[i] & m.measured[j]
+                apart = np.linalg.norm((m.position[i] - m.position[j])[both])
+                if apart > REPEAT_APART * np.hypot(s[i], s[j]):
+                    return True
+    return False
+
+
+def prior_starts(
+    design: Design, free: Sequence[str], priors: bool | Priors = True
+) -> dict[str, dict[str, float]]:
+    """Starts one prior sigma (``priors``' widths, the registry's where a width is
+    infinite or priors are off) either side of the nominal design along each free
+    parameter, the others nominal, inside the fit's bounds; by label, e.g.
+    'bending_rigidity_scale +1 sigma'. [SI]"""
+    widths = prior_widths(priors if isinstance(priors, Mapping) else None)
+    starts = {}
+    for name in free:
+        spec = FREE_PARAMETERS[name]
+        width = widths[name] if np.isfinite(widths[name]) else spec.prior
+        p0 = PARAMETERS[name].value(design)
+        for sign in (-1, 1):
+            value = float(np.clip(spec.physical(sign * width, p0), spec.lower, spec.upper))
+            value = float(np.clip(value, p0 - spec.span, p0 + spec.span))
+            starts[f"{name} {sign:+d} sigma"] = {name: value}
+    return starts
 
 
 def stiff_start(
@@ -82,10 +131,12 @@ def calibrate_from_starts(
     Where the data have a sequence and driving their path ends in other states than the
     fit's solve at the best estimate (:func:`path_matters`), the best is also fitted along
     the path ('along the path'; on-axis torsion set [99, 9], 15 rows: 1.7 -> 0.9x the
-    noise's RMS); where the path matters already at the start, the fit is also driven
-    from there ('along the path from the start': a fit from rest can settle where the
-    path no longer matters, in the wrong states; null as-built set of seed 18 in
-    tests/optimize/fitting/test_priors.py, chi-square 15,323 -> 3.0). Returns the best
+    noise's RMS); where the data have a sequence, the fit is also driven from the start
+    ('along the path from the start': a fit from rest can settle where the path no
+    longer matters, in the wrong states, null as-built set of seed 18 in
+    tests/optimize/fitting/test_priors.py, chi-square 15,323 -> 3.0; and the path may
+    matter at neither the nominal design nor the fit from rest while the robot measured is
+    multistable, seed 2051170903 there, RMS 13.9 -> 0.54 mm). Returns the best
     (every fitted row solved, then the least chi-square) and the fit from each start by name."""
     names = default_free(effects) if free is None else tuple(free)
     fits = {"nominal": calibrate(design, m, effects, names, **options)}
@@ -104,17 +155,23 @@ def calibrate_from_starts(
         return best_fit(), fits
     model = model_for(frozenset(effects))
     driven = {**options, "ordered": "driven"}
-    nominal = fits["nominal"]
-    start = nominal.params.copy()
-    for name, value in {**nominal.nominal, **(options.get("initial") or {})}.items():
-        start[index(name)] = value
-    if path_matters(model, start, m, mode):
-        # the fit from rest may have left the path's states for good on its way
+    if m.sequence is not None:
+        # the fit from rest may leave the path's states for good on its way, and where the
+        # path matters at neither the start nor the fit's best (a robot measured with a
+        # stronger magnet than the nominal one is multistable, the nominal one is not),
+        # only a fit along the path reaches the states the bench drove to
         fits["along the path from the start"] = calibrate(design, m, effects, names, **driven)
     best = best_fit()
-    if best is not fits.get("along the path from the start") and path_matters(
-        model, best.params, m, mode
-    ):
+    if m.sequence is not None and (repeats_disagree(m, options.get("sigma")) or best.unconverged):
+        # a fit starts in one basin of the misfit; which basin holds the bench's states
+        # is not known where the robot is multistable or the best fit leaves rows unsolved
+        for label, start in prior_starts(design, names, options.get("priors", False)).items():
+            fits[f"along the path from {label}"] = calibrate(
+                design, m, effects, names, **{**driven, "initial": start}
+            )
+        best = best_fit()
+    along = [f for label, f in fits.items() if label.startswith("along the path")]
+    if not any(best is f for f in along) and path_matters(model, best.params, m, mode):
         fits["along the path"] = calibrate(
             design, m, effects, names, **{**driven, "initial": best.estimate}
         )
