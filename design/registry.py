@@ -16,6 +16,7 @@ is in the quantity's file unit (:data:`FILE_UNITS`) with the unit's suffix on th
 
 from __future__ import annotations
 
+import math
 import re
 import warnings
 from dataclasses import dataclass, replace
@@ -52,6 +53,17 @@ class Fit:
     def physical(self, u: float, p0: float) -> float:
         """The parameter's value [SI] at fit unit ``u`` about its nominal value ``p0`` [SI]."""
         return p0 * float(np.exp(u)) if self.kind == "log" else p0 + self.step * u
+
+    def fit_unit(self, p: float, p0: float) -> float:
+        """The fit unit of value ``p`` about the nominal value ``p0`` [SI] (the inverse of
+        :meth:`physical`; 'log': NaN unless both are positive). [-]"""
+        if self.kind == "log":
+            return math.log(p / p0) if p > 0 and p0 > 0 else math.nan
+        return (p - p0) / self.step
+
+    def unit_size(self, p: float) -> float:
+        """The SI size of one fit unit at value ``p``: dp/du. [SI]"""
+        return abs(p) if self.kind == "log" else self.step
 
 
 @dataclass(frozen=True)

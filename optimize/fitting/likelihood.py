@@ -76,18 +76,6 @@ class Interval:
     fits: int
 
 
-def _to_u(name: str, value: float) -> float:
-    return (
-        math.log(value)
-        if FREE_PARAMETERS[name].kind == "log"
-        else value / FREE_PARAMETERS[name].step
-    )
-
-
-def _from_u(name: str, u: float) -> float:
-    return math.exp(u) if FREE_PARAMETERS[name].kind == "log" else u * FREE_PARAMETERS[name].step
-
-
 def _range(name: str, nominal: float) -> tuple[float, float]:
     """The values the fit admits for ``name`` (its absolute bounds and span). [SI]"""
     spec = FREE_PARAMETERS[name]
@@ -119,10 +107,10 @@ def profile_intervals(
         name, sign = job
         rest = tuple(n for n in free if n != name)
         lo, hi = _range(name, fit.nominal[name])
-        u_hat = _to_u(name, fit.estimate[name])
+        u_hat = FREE_PARAMETERS[name].fit_unit(fit.estimate[name], fit.nominal[name])
         # The linear standard error in fit units: the first step of each end's search.
         spec = FREE_PARAMETERS[name]
-        se = fit.standard_error[name] / (fit.estimate[name] if spec.kind == "log" else spec.step)
+        se = fit.standard_error[name] / spec.unit_size(fit.estimate[name])
         se = se if np.isfinite(se) and se > 0 else spec.prior
         bound = lo if sign < 0 else hi
         return _end(design, m, fit, name, rest, u_hat, sign, se, bound, ordered, sigma)
@@ -236,7 +224,8 @@ def _end(
     sigma: float | None,
 ) -> tuple[float, int]:
     """One end of the 1-sigma interval: (value [SI], refits)."""
-    span = abs(_to_u(name, bound) - u_hat)
+    spec, nominal = FREE_PARAMETERS[name], fit.nominal[name]
+    span = abs(spec.fit_unit(bound, nominal) - u_hat)
     if span < 1e-12:
         return bound, 0
     # Where each refit starts: the last point within 1 sigma (first the estimate), and,
@@ -247,7 +236,7 @@ def _end(
     h = min(step, span)
     fits, retried = 0, False
     for _ in range(MAX_FITS):
-        value = _from_u(name, u_hat + sign * h)
+        value = spec.physical(u_hat + sign * h, nominal)
         r, cal = _refit(design, m, fit, name, value, rest, starts, ordered, sigma)
         r, fits = abs(r), fits + len(starts)
         if r > JUMP * max(1.0, h / step) and not retried:  # the refit's cliff?
@@ -272,13 +261,13 @@ def _end(
         else:  # secant across r = 1, bisection if it leaves the bracket
             (h0, r0), (h1, r1) = below, above
             if h1 - h0 < RESOLUTION * step:  # placed well enough: the nearest point beyond
-                return _from_u(name, u_hat + sign * h1), fits
+                return spec.physical(u_hat + sign * h1, nominal), fits
             h = h0 + (1 - r0) * (h1 - h0) / (r1 - r0)
             if not h0 < h < h1:
                 h = 0.5 * (h0 + h1)
     # Out of refits: the nearest point beyond 1 sigma (conservative), else the last below.
     h = above[0] if above is not None else below[0]
-    return _from_u(name, u_hat + sign * h), fits
+    return spec.physical(u_hat + sign * h, nominal), fits
 
 
 __all__ = ["Interval", "profile_intervals", "profile_sigma", "widened"]

@@ -145,20 +145,10 @@ def calibrate(
     restarted = False
     for name, (centre, width) in (anchor or {}).items():
         j, spec = names.index(name), FREE_PARAMETERS[name]
-        log = spec.kind == "log"
-        prob.prior_centre[j] = (
-            np.log(centre / nominal[name]) if log else (centre - nominal[name]) / spec.step
-        )
-        prob.prior_width[j] = width / centre if log else width / spec.step
+        prob.prior_centre[j] = spec.fit_unit(centre, nominal[name])
+        prob.prior_width[j] = width / spec.unit_size(centre)
     lo, hi = prob.bounds()
-    u0 = np.array(
-        [
-            np.log(start[n] / nominal[n])
-            if FREE_PARAMETERS[n].kind == "log"
-            else (start[n] - nominal[n]) / FREE_PARAMETERS[n].step
-            for n in names
-        ]
-    )
+    u0 = np.array([FREE_PARAMETERS[n].fit_unit(start[n], nominal[n]) for n in names])
     # Start strictly inside the bounds: a parameter whose nominal value is a bound (no
     # friction, no tip mass) would otherwise start where its derivative is one-sided.
     inset = np.minimum(0.05 * np.array([FREE_PARAMETERS[n].prior for n in names]), 0.01 * (hi - lo))

@@ -162,12 +162,7 @@ def pull(name: str, value: float, nominal: float, width: float) -> float:
     prior: an infinite ``width``). [-]"""
     if not math.isfinite(width):
         return 0.0
-    spec = FREE_PARAMETERS[name]
-    if spec.kind == "log":
-        u = math.log(value / nominal) if value > 0 and nominal > 0 else math.nan
-    else:
-        u = (value - nominal) / spec.step
-    return u / width
+    return FREE_PARAMETERS[name].fit_unit(value, nominal) / width
 
 
 def conflict(offset: np.ndarray, width: np.ndarray, data_covariance: np.ndarray) -> float:

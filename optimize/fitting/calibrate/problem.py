@@ -105,19 +105,13 @@ class _Problem:
 
     def dp_du(self, u: np.ndarray) -> np.ndarray:
         p = self.params(u)
-        return np.array(
-            [p[i] if s.kind == "log" else s.step for i, s in zip(self.idx, self.spec, strict=True)]
-        )
+        return np.array([s.unit_size(p[i]) for i, s in zip(self.idx, self.spec, strict=True)])
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = [], []
         for spec, p0 in zip(self.spec, self.p0, strict=True):
-            if spec.kind == "log":
-                lo.append(np.log(spec.lower / p0))
-                hi.append(np.log(spec.upper / p0))
-            else:
-                lo.append(max(spec.lower - p0, -spec.span) / spec.step)
-                hi.append(min(spec.upper - p0, spec.span) / spec.step)
+            lo.append(spec.fit_unit(max(spec.lower, p0 - spec.span), p0))
+            hi.append(spec.fit_unit(min(spec.upper, p0 + spec.span), p0))
         lower, upper = np.array(lo), np.array(hi)
         if self.within is not None:  # the prior-bounded fit: nominal +- within sigmas
             reach = np.where(np.isfinite(self.prior_sigma), self.within * self.prior_sigma, np.inf)

@@ -130,7 +130,7 @@ class CalibrationResult:
         offset, width, error = [], [], []
         for n in self.names:
             spec = FREE_PARAMETERS[n]
-            scale = abs(self.estimate[n]) if spec.kind == "log" else spec.step
+            scale = spec.unit_size(self.estimate[n])
             w = self.width(n)
             offset.append(pulls[n] * w if math.isfinite(w) else math.nan)
             width.append(w)

@@ -74,9 +74,13 @@ def test_an_interval_end_where_the_profile_jumps_is_the_jump(monkeypatch):
     the profile) ends where the smooth profile does. The refit is replaced by profiles of
     known r(u) (u = log of the value)."""
     estimate, se = 0.3, 0.07
-    u_hat = math.log(estimate)
+    u_hat = math.log(estimate)  # the fit unit about the factor's nominal value, 1
     # one other parameter, "x", whose value names the basin a refit starts in
-    fit = SimpleNamespace(estimate={"x": "estimate"}, states=None, nominal={"x": "nominal"})
+    fit = SimpleNamespace(
+        estimate={"x": "estimate"},
+        states=None,
+        nominal={"x": "nominal", "wire_torsion_scale": 1.0},
+    )
 
     def end(r_of_distance, step=se, from_nominal=None):
         def refit(design, m, fit, name, value, rest, starts, ordered, sigma):
