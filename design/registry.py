@@ -32,7 +32,7 @@ from design.units import DEG, GRAM, MM, MPA
 
 
 @dataclass(frozen=True)
-class Fit:
+class FitSpec:
     """How calibration frees a parameter (:mod:`optimize.fitting.calibrate`).
 
     kind : 'log' (fit u = ln(p / p0), for positive quantities) or 'linear'
@@ -93,7 +93,7 @@ class Parameter:
     low_open: bool = False
     default: float | None = None
     tolerance: tuple[str, float] | None = None
-    fit: Fit | None = None
+    fit: FitSpec | None = None
 
     def value(self, design: Design) -> float:
         """Its value in ``design``. [unit]"""
@@ -123,10 +123,10 @@ def _vector(prefix: str, unit: str, meaning: str, field: str, key: str, **kw: An
     ]
 
 
-_MODULUS_FIT = Fit("log", 1e5, 1e12, 0.5)
-_REMANENCE_FIT = Fit("log", 0.05, 2.5, 0.1)
-_FRICTION_FIT = Fit("linear", 0.0, 45 * DEG, 5.0, DEG)
-_PLACEMENT_FIT = Fit("linear", -10.0, 10.0, 5.0, MM, 0.05)
+_MODULUS_FIT = FitSpec("log", 1e5, 1e12, 0.5)
+_REMANENCE_FIT = FitSpec("log", 0.05, 2.5, 0.1)
+_FRICTION_FIT = FitSpec("linear", 0.0, 45 * DEG, 5.0, DEG)
+_PLACEMENT_FIT = FitSpec("linear", -10.0, 10.0, 5.0, MM, 0.05)
 
 
 def _tube(tube: str, modulus_tolerance: float) -> list[Parameter]:
@@ -176,7 +176,7 @@ _TABLE: list[Parameter] = [
         0.0,
         10000.0,
         True,
-        fit=Fit("linear", 1e-3, 10.0, 5.0, MM, 0.05),
+        fit=FitSpec("linear", 1e-3, 10.0, 5.0, MM, 0.05),
     ),
     # NiTi wire moduli spread less than extruded tubes' (5 % against 10 %)
     *_tube("catheter", 0.10),
@@ -253,7 +253,7 @@ _TABLE: list[Parameter] = [
         0.0,
         1000.0,
         default=0.0,
-        fit=Fit("linear", 0.0, 0.5, 1.0, 1e-3),
+        fit=FitSpec("linear", 0.0, 0.5, 1.0, 1e-3),
     ),
     # the printed mounting pieces (design.mounting); process numbers default to resin's
     *[
@@ -362,7 +362,7 @@ _TABLE: list[Parameter] = [
         "external magnetisation direction",
         "external_magnet.magnetization",
         "external_magnet.magnetization",
-        fit=Fit("linear", -2.0, 2.0, 5.0, 0.01, 0.5),
+        fit=FitSpec("linear", -2.0, 2.0, 5.0, 0.01, 0.5),
     ),
     # a lab, a centrifuge up to ten g
     *_vector(
@@ -380,7 +380,7 @@ _TABLE: list[Parameter] = [
             "-",
             f"calibration factor on the {what} (1 = as designed)",
             None,
-            fit=Fit("log", 1e-3, 1e3, prior),
+            fit=FitSpec("log", 1e-3, 1e3, prior),
         )
         for name, what, prior in (
             ("bending_rigidity_scale", "bending rigidity EI of catheter + wire", 0.5),

@@ -10,13 +10,13 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 
-from design.registry import PARAMETERS, Fit, file_unit
+from design.registry import PARAMETERS, FitSpec, file_unit
 from optimize.fitting.sensitivity import SENSITIVE
 
 
 @dataclass(frozen=True)
-class FreeParameter(Fit):
-    """How one model parameter is fitted: its :class:`design.registry.Fit`, its name and
+class FreeParameter(FitSpec):
+    """How one model parameter is fitted: its :class:`design.registry.FitSpec`, its name and
     the unit shown in reports (label, factor from SI)."""
 
     name: str = ""

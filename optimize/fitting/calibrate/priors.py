@@ -3,7 +3,7 @@
 Every parameter calibration can free has a stated one-sigma uncertainty about its nominal
 value (the design file's, or 1 for a model factor), in its fit units
 (:data:`optimize.fitting.calibrate.policy.FREE_PARAMETERS`): by default the registry's
-(:class:`design.registry.Fit` ``prior``), which is at least the manufacturing or placement
+(:class:`design.registry.FitSpec` ``prior``), which is at least the manufacturing or placement
 tolerance of :mod:`design.registry` and covers what a bench does not control:
 
 - the external magnet's centre, 5 mm per axis (placed to +-1 mm by the registry's
