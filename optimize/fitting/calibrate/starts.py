@@ -84,8 +84,8 @@ def prior_starts(
         width = widths[name] if np.isfinite(widths[name]) else spec.prior
         p0 = PARAMETERS[name].value(design)
         for sign in (-1, 1):
-            value = float(np.clip(spec.physical(sign * width, p0), spec.lower, spec.upper))
-            value = float(np.clip(value, p0 - spec.span, p0 + spec.span))
+            low, high = max(spec.lower, p0 - spec.span), min(spec.upper, p0 + spec.span)
+            value = float(np.clip(spec.physical(sign * width, p0), low, high))
             starts[f"{name} {sign:+d} sigma"] = {name: value}
     return starts
 
